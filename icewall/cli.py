@@ -1,0 +1,132 @@
+"""The `icewall` command: a thin shell over the library (parse, call, map errors to exit codes)."""
+
+from __future__ import annotations
+
+import functools
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from icewall import __version__
+from icewall.errors import IcewallError
+
+SET_HELP = "Override a deck value, e.g. --set materials.concrete.fc=40 (repeatable)."
+
+
+def _handle_errors(func):
+    """Report IcewallError as one line on stderr with its exit code; no traceback."""
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        try:
+            return func(*args, **kwargs)
+        except IcewallError as exc:
+            click.echo(f"error: {exc}", err=True)
+            sys.exit(exc.exit_code)
+        except KeyboardInterrupt:
+            click.echo("interrupted", err=True)
+            sys.exit(130)
+
+    return wrapper
+
+
+@click.group()
+@click.version_option(__version__, prog_name="icewall")
+def main() -> None:
+    """Nonlinear FE analysis of steel-concrete-steel composite ice-resisting walls.
+
+    Units: N, mm, MPa.
+    """
+
+
+@main.command()
+@click.argument("deck", type=click.Path(dir_okay=False))
+@click.option("--set", "overrides", multiple=True, help=SET_HELP)
+@click.option("--json", "as_json", is_flag=True, help="Print the validated deck as JSON.")
+@_handle_errors
+def check(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
+    """Validate DECK without running it (exit code 2 on any problem)."""
+    from dataclasses import asdict
+
+    from icewall.deck.load import load_deck
+
+    loaded = load_deck(deck, overrides)
+    if as_json:
+        click.echo(json.dumps(asdict(loaded.deck), indent=2))
+    else:
+        click.echo(f"{deck}: ok ({loaded.deck.specimen.name})")
+
+
+@main.command()
+@click.argument("deck", type=click.Path(dir_okay=False))
+@click.option("--set", "overrides", multiple=True, help=SET_HELP)
+@click.option("--out", "out_dir", default="meshes", show_default=True,
+              type=click.Path(file_okay=False), help="Directory for the mesh files.")
+@click.option("--format", "formats", default="msh,vtu,xdmf", show_default=True,
+              help="Comma-separated: msh, vtu, xdmf.")
+@_handle_errors
+def mesh(deck: str, overrides: tuple[str, ...], out_dir: str, formats: str) -> None:
+    """Mesh DECK, write the mesh files and print counts and Gauss-point spacing h_c."""
+    from icewall.deck.load import load_deck
+    from icewall.mesh.build import build_mesh
+    from icewall.mesh.io import mesh_report, write_mesh
+
+    loaded = load_deck(deck, overrides)
+    the_mesh = build_mesh(loaded.deck)
+    stem = Path(out_dir) / Path(deck).stem
+    for path in write_mesh(the_mesh, stem, [f.strip() for f in formats.split(",") if f.strip()]):
+        click.echo(f"wrote {path}")
+    click.echo(mesh_report(the_mesh, loaded.deck.analysis.gauss))
+
+
+@main.command()
+@click.argument("deck", type=click.Path(dir_okay=False))
+@click.option("--set", "overrides", multiple=True, help=SET_HELP)
+@click.option("-o", "--output", type=click.Path(), default=None,
+              help="Result file (.h5) or directory [default: outputs.directory of the deck].")
+@click.option("-q", "--quiet", is_flag=True, help="No progress output.")
+@_handle_errors
+def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool) -> None:
+    """Run the analysis of DECK and write an HDF5 result."""
+    from icewall.deck.load import load_deck
+    from icewall.pipeline import run_deck
+
+    loaded = load_deck(deck, overrides)
+    report = run_deck(loaded, output, progress=None if quiet else click.echo)
+    if not quiet:
+        t = report.timings
+        shares = ", ".join(f"{k} {v:.3f} s" for k, v in t.items() if k != "total")
+        click.echo(f"{report.status}: {report.n_steps} steps -> {report.path}")
+        click.echo(f"time {t.get('total', 0.0):.3f} s ({shares})")
+
+
+@main.command()
+@click.argument("result", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@_handle_errors
+def summary(result: str, as_json: bool) -> None:
+    """Key figures of a RESULT file: peak load and its deflection, final load, steps, time."""
+    from icewall.results.summary import format_summary, summarize
+
+    data = summarize(result)
+    click.echo(json.dumps(data, indent=2) if as_json else format_summary(data))
+
+
+@main.command()
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+              help="Write to a file instead of standard output.")
+def schema(output: str | None) -> None:
+    """Print the JSON Schema of the deck format (for editors)."""
+    from icewall.deck.jsonschema import deck_json_schema
+
+    text = json.dumps(deck_json_schema(), indent=2) + "\n"
+    if output:
+        Path(output).write_text(text)
+    else:
+        click.echo(text, nl=False)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,94 @@
+"""Load a deck: read YAML (with lines), apply --set overrides, build dataclasses, validate."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from icewall.deck.fields import Context, build
+from icewall.deck.schema import Deck
+from icewall.deck.validate import validate
+from icewall.deck.yamlsrc import LineDict, LineList, parse_yaml, read_yaml
+from icewall.errors import DeckError
+
+_PATH_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?")
+
+
+@dataclass(frozen=True)
+class LoadedDeck:
+    """A validated deck with its source text and parsed tree (for line look-ups)."""
+
+    deck: Deck
+    text: str
+    path: str
+    tree: LineDict
+
+    def line_of(self, key_path: str) -> int | None:
+        return line_of(self.tree, key_path)
+
+
+def line_of(tree: LineDict, key_path: str) -> int | None:
+    """Line of a dotted key path such as 'geometry.diaphragms.positions[2]' (best effort)."""
+    node, line = tree, tree.line
+    for token in key_path.split("."):
+        match = _PATH_TOKEN.fullmatch(token)
+        if match is None or not isinstance(node, dict) or match.group(1) not in node:
+            return line
+        key, index = match.group(1), match.group(2)
+        line = node.line_of(key) if isinstance(node, LineDict) else line
+        node = node[key]
+        if index is not None and isinstance(node, list) and int(index) < len(node):
+            line = node.line_of(int(index)) if isinstance(node, LineList) else line
+            node = node[int(index)]
+    return line
+
+
+def apply_override(tree: LineDict, assignment: str, file: str) -> None:
+    """Apply one `key.path=value` override (value parsed as YAML) in place."""
+    if "=" not in assignment:
+        raise DeckError(f"--set expects key.path=value, got {assignment!r}", file)
+    key_path, raw = assignment.split("=", 1)
+    keys = key_path.strip().split(".")
+    if not all(_PATH_TOKEN.fullmatch(k) and "[" not in k for k in keys):
+        raise DeckError(f"--set: bad key path {key_path!r}", file)
+    try:
+        value = yaml.safe_load(raw)
+    except yaml.YAMLError as exc:
+        raise DeckError(f"--set {key_path}: cannot parse value {raw!r}: {exc}", file) from None
+    node = tree
+    for key in keys[:-1]:
+        child = node.get(key)
+        if child is None:
+            child = LineDict()
+            child.line, child.key_lines = None, {}
+            node[key] = child
+        if not isinstance(child, dict):
+            raise DeckError(f"--set {key_path}: {key!r} is not a mapping", file)
+        node = child
+    node[keys[-1]] = value
+    if isinstance(node, LineDict):
+        node.key_lines[keys[-1]] = None
+
+
+def load_deck(path: str | Path, overrides: tuple[str, ...] | list[str] = ()) -> LoadedDeck:
+    """Read, override, build and validate a deck file. Raises DeckError on any problem."""
+    text, tree = read_yaml(path)
+    return _finish(text, tree, str(path), overrides)
+
+
+def load_deck_text(text: str, name: str = "<deck>",
+                   overrides: tuple[str, ...] | list[str] = ()) -> LoadedDeck:
+    """Same as load_deck for deck text held in memory (tests, results files)."""
+    return _finish(text, parse_yaml(text, name), name, overrides)
+
+
+def _finish(text: str, tree: LineDict, file: str, overrides) -> LoadedDeck:
+    for assignment in overrides:
+        apply_override(tree, assignment, file)
+    deck = build(Deck, tree, Context(file))
+    loaded = LoadedDeck(deck=deck, text=text, path=file, tree=tree)
+    validate(loaded.deck, lambda message, key: DeckError(message, file, loaded.line_of(key), key))
+    return loaded

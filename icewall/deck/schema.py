@@ -1,0 +1,244 @@
+"""Deck format v1: every option with its type, default, unit and one-line doc, in one place.
+
+Positions along the wall (diaphragms, supports, legs, load patches, control point) are
+distances x >= 0 from midspan; v1 specimens are symmetric about midspan and every list is
+mirrored (x and -x; x = 0 once). Units: N, mm, MPa.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from icewall.deck.fields import option
+
+FORMULATIONS = ("plane_strain", "plane_stress", "axisymmetric")
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True, kw_only=True)
+class Reference:
+    """Reference values in the deck's load measure (optional; withheld values stay absent)."""
+
+    ultimate_test: float | None = option(None, doc="ultimate load measured in the test")
+    residual_test: float | None = option(None, doc="residual load measured in the test")
+    ultimate_thesis: float | None = option(None, doc="ultimate load of the thesis' FEA")
+    residual_thesis: float | None = option(None, doc="residual load of the thesis' FEA")
+    source: str = option("", doc="where these numbers come from")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Specimen:
+    name: str = option(doc="specimen name, e.g. CF-4; also names the result file")
+    series: str = option("custom", doc="test series", choices=("CF", "TF", "VTT", "custom"))
+    description: str = option("", doc="free text")
+    reference: Reference = option(Reference(), doc="test and thesis reference values")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Diaphragms:
+    thickness: float = option(doc="diaphragm plate thickness t_d", unit="mm",
+                              exclusive_minimum=0.0)
+    positions: tuple[float, ...] = option([], doc="centreline x of each diaphragm from midspan "
+                                          "(mirrored)", unit="mm", minimum=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Support:
+    x: float = option(doc="support centreline from midspan (mirrored)", unit="mm", minimum=0.0)
+    bearing_plate_width: float = option(75.0, doc="width of the stiff bearing plate under the "
+                                        "support (0 = none)", unit="mm", minimum=0.0)
+    bearing_plate_thickness: float = option(25.0, doc="thickness of the bearing plate",
+                                            unit="mm", exclusive_minimum=0.0)
+    restraint: str = option("roller", doc="roller: u_y = 0; pin: u_x = u_y = 0",
+                            choices=("roller", "pin"))
+    level: str = option("underside", doc="underside: lowest material at x (bearing plate or "
+                        "leg); wall: underside of the bottom plate (tie-downs)",
+                        choices=("underside", "wall"))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Leg:
+    x: float = option(doc="leg centreline from midspan (mirrored)", unit="mm", minimum=0.0)
+    length: float = option(doc="leg length along the wall (L_2)", unit="mm",
+                           exclusive_minimum=0.0)
+    height: float = option(doc="leg height below the wall (h_2)", unit="mm",
+                           exclusive_minimum=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Geometry:
+    """Steel-concrete-steel sandwich beam; y = 0 is the underside of the bottom plate."""
+
+    model: str = option("half", doc="half model (symmetry at midspan) or full model",
+                        choices=("half", "full"))
+    depth: float = option(doc="overall depth h (plate to plate, outside faces)", unit="mm",
+                          exclusive_minimum=0.0)
+    width: float = option(doc="width b = out-of-plane thickness of the 2D model", unit="mm",
+                          exclusive_minimum=0.0)
+    top_plate: float = option(doc="top (loaded) plate thickness", unit="mm",
+                              exclusive_minimum=0.0)
+    bottom_plate: float = option(doc="bottom plate thickness", unit="mm", exclusive_minimum=0.0)
+    span: float = option(doc="distance between the support centrelines", unit="mm",
+                         exclusive_minimum=0.0)
+    overhang: float = option(doc="from a support centreline to the outer face of the wall end",
+                             unit="mm", minimum=0.0)
+    end_plate: float = option(0.0, doc="thickness of the steel end plate / end cap closing "
+                              "each end (0 = open end)", unit="mm", minimum=0.0)
+    diaphragms: Diaphragms | None = option(None, doc="vertical diaphragm plates")
+    supports: tuple[Support, ...] = option(doc="supports and tie-downs")
+    legs: tuple[Leg, ...] = option([], doc="legs under the wall (TF series), linear elastic")
+
+    @property
+    def half_length(self) -> float:
+        return 0.5 * self.span + self.overhang
+
+
+@dataclass(frozen=True, kw_only=True)
+class Surface:
+    """Willam-Warnke five-parameter surface control points (errata §2.3, set B)."""
+
+    name: str = option("willam-warnke-B", doc="calibration name (see materials docs)")
+    biaxial_ratio: float = option(1.20, doc="equal-biaxial strength f_cb / f'c",
+                                  exclusive_minimum=1.0)
+    f1_ratio: float = option(1.45, doc="biaxial high-compression point f1/f'c on "
+                             "hydrostatic stress sqrt(3) f'c (tensile meridian)",
+                             exclusive_minimum=0.0)
+    f2_ratio: float = option(1.725, doc="uniaxial high-compression point f2/f'c on "
+                             "hydrostatic stress sqrt(3) f'c (compressive meridian)",
+                             exclusive_minimum=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Concrete:
+    fc: float = option(doc="uniaxial compressive strength f'c", unit="MPa", minimum=10.0,
+                       maximum=150.0)
+    model: str = option("rotating_crack", doc="constitutive model",
+                        choices=("rotating_crack", "elastic"))
+    E: float | None = option(None, doc="initial modulus (default 4400 sqrt(f'c), eq. 4.1 mod.)",
+                             unit="MPa", exclusive_minimum=0.0)
+    ft: float | None = option(None, doc="tensile strength (default 0.33 sqrt(f'c), eq. 4.2)",
+                              unit="MPa", exclusive_minimum=0.0)
+    eps_c: float = option(0.0025, doc="strain at the uniaxial peak", exclusive_minimum=0.0,
+                          maximum=0.02)
+    nu: float = option(0.2, doc="initial Poisson's ratio", minimum=0.0, maximum=0.49)
+    Gf: float = option(0.10, doc="tensile fracture energy G_f", unit="N/mm",
+                       exclusive_minimum=0.0)
+    alpha: float | None = option(None, doc="effectiveness factor at 1.5 % strain (default: "
+                                 "fitted function of f'c)", exclusive_minimum=0.0, maximum=1.0)
+    k_t: float | None = option(None, doc="tensile decay (default f't h_c / G_f, eq. 3.29)",
+                               exclusive_minimum=0.0)
+    k_c: float | None = option(None, doc="compressive decay (default eq. 3.34 corrected)",
+                               exclusive_minimum=0.0)
+    surface: Surface = option(Surface(), doc="ultimate-surface calibration")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Steel:
+    fy: float = option(doc="yield stress f_y", unit="MPa", exclusive_minimum=0.0,
+                       maximum=2000.0)
+    E: float = option(200000.0, doc="Young's modulus E_s", unit="MPa", exclusive_minimum=0.0)
+    nu: float = option(0.3, doc="Poisson's ratio", minimum=0.0, maximum=0.49)
+    hardening: float = option(0.02, doc="hardening slope as a fraction of E_s (thesis 4.3.2)",
+                              minimum=0.0, maximum=1.0)
+    model: str = option("von_mises", doc="constitutive model", choices=("von_mises", "elastic"))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Elastic:
+    E: float = option(200000.0, doc="Young's modulus", unit="MPa", exclusive_minimum=0.0)
+    nu: float = option(0.3, doc="Poisson's ratio", minimum=0.0, maximum=0.49)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Interface:
+    model: str = option("gap", doc="gap: double nodes with gap elements (thesis 3.3); "
+                        "bonded: steel and concrete share nodes", choices=("gap", "bonded"))
+    friction: float = option(0.5773, doc="Coulomb friction coefficient (30 deg)", minimum=0.0,
+                             maximum=2.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Materials:
+    concrete: Concrete = option(doc="concrete infill")
+    steel: Steel = option(doc="plates and diaphragms")
+    bearing_plates: Elastic = option(Elastic(), doc="bearing plates (linear elastic steel)")
+    legs: Elastic = option(Elastic(), doc="legs, idealised linear elastic (thesis 4.3.2)")
+    interface: Interface = option(Interface(), doc="steel-concrete interface")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Patches:
+    positions: tuple[float, ...] = option(doc="centre x of each jack/pressure patch on the top "
+                                          "plate (mirrored)", unit="mm", minimum=0.0)
+    width: float = option(50.0, doc="patch width along the span", unit="mm",
+                          exclusive_minimum=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Measure:
+    kind: str = option("total", doc="intensity: w = P / (b * tributary_length) (CF); total: "
+                       "sum of all patch loads of the whole specimen (TF, VTT)",
+                       choices=("intensity", "total"))
+    tributary_length: float | None = option(None, doc="jack spacing for kind = intensity",
+                                            unit="mm", exclusive_minimum=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Preload:
+    axial_force: float = option(doc="in-plane axial force N on the wall ends (negative = "
+                                "compression), applied first and held", unit="N")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Control:
+    x: float = option(0.0, doc="control point on the top surface, from midspan", unit="mm",
+                      minimum=0.0)
+    increment: float = option(1.0, doc="control displacement increment", unit="mm",
+                              exclusive_minimum=0.0)
+    target: float = option(40.0, doc="final control displacement (downward)", unit="mm",
+                           exclusive_minimum=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Loads:
+    patches: Patches = option(doc="jack loads as pressure patches, all with the same load P")
+    measure: Measure = option(Measure(), doc="how the reported load is computed from P")
+    preload: Preload | None = option(None, doc="in-plane preload (TF series)")
+    control: Control = option(Control(), doc="displacement control")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Analysis:
+    solver: str = option("linear", doc="linear: linear elasticity with the initial moduli",
+                         choices=("linear",))
+    formulation: str = option("plane_strain", doc="2D idealisation", choices=FORMULATIONS)
+    element: str = option("quad8", doc="element type", choices=("quad8", "quad4"))
+    gauss: int = option(3, doc="Gauss rule n x n", choices=(2, 3, 4))
+    element_size: float = option(75.0, doc="target element size", unit="mm",
+                                 exclusive_minimum=0.0)
+    tolerance_displacement: float = option(0.05, doc="displacement norm tolerance (eq. 4.4)",
+                                           exclusive_minimum=0.0, maximum=1.0)
+    tolerance_load: float = option(0.05, doc="load norm tolerance (eq. 4.5)",
+                                   exclusive_minimum=0.0, maximum=1.0)
+    max_iterations: int = option(200, doc="iteration limit per step", minimum=1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Outputs:
+    fields: tuple[str, ...] = option(["displacement", "stress", "strain"],
+                                     doc="what is written per step",
+                                     choices=("displacement", "stress", "strain", "state"))
+    every: int = option(1, doc="write the fields every N steps (history: every step)",
+                        minimum=1)
+    directory: str = option("results", doc="output directory (relative to the working dir)")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Deck:
+    version: int = option(doc="deck format version", choices=(FORMAT_VERSION,))
+    specimen: Specimen = option(doc="identification and reference values")
+    geometry: Geometry = option(doc="section geometry")
+    materials: Materials = option(doc="material parameters")
+    loads: Loads = option(doc="loads and displacement control")
+    analysis: Analysis = option(Analysis(), doc="analysis settings")
+    outputs: Outputs = option(Outputs(), doc="what to write")

@@ -1,0 +1,113 @@
+"""Geometric and cross-field checks of a built deck (types and limits are checked earlier)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from icewall.deck.schema import Deck
+
+ErrorFactory = Callable[[str, str], Exception]
+MAX_ELEMENTS = 2_000_000
+
+
+def _spans_overlap(items: list[tuple[float, float, str]], what: str, fail: ErrorFactory) -> None:
+    """items: (start, end, key) along x, mirrored already; touching is allowed."""
+    ordered = sorted(items)
+    for (a0, a1, ka), (b0, b1, kb) in zip(ordered, ordered[1:], strict=False):
+        if b0 < a1 - 1e-9:
+            other = f" (overlaps {ka})" if ka != kb else " (overlaps its mirror image)"
+            raise fail(f"{what} overlap: [{b0:g}, {b1:g}] mm and [{a0:g}, {a1:g}] mm{other}", kb)
+
+
+def _mirrored(x: float, half_width: float, key: str) -> list[tuple[float, float, str]]:
+    spans = [(x - half_width, x + half_width, key)]
+    if x > 0:
+        spans.append((-x - half_width, -x + half_width, key))
+    return spans
+
+
+def validate(deck: Deck, fail: ErrorFactory) -> None:
+    """Raise fail(message, key_path) for the first impossible combination found."""
+    geo, loads, analysis = deck.geometry, deck.loads, deck.analysis
+    half = geo.half_length
+    inner = half - geo.end_plate
+    if geo.top_plate + geo.bottom_plate >= geo.depth:
+        raise fail(f"plates ({geo.top_plate:g} + {geo.bottom_plate:g} mm) are as thick as or "
+                   f"thicker than the depth {geo.depth:g} mm", "geometry.top_plate")
+    if geo.end_plate >= half:
+        raise fail(f"end plate {geo.end_plate:g} mm is as long as the half wall {half:g} mm",
+                   "geometry.end_plate")
+    if geo.diaphragms is not None:
+        spans = []
+        t = geo.diaphragms.thickness
+        for i, x in enumerate(geo.diaphragms.positions):
+            key = f"geometry.diaphragms.positions[{i}]"
+            if x + 0.5 * t > inner + 1e-9:
+                raise fail(f"diaphragm at x = {x:g} mm lies outside the wall (its outer face "
+                           f"{x + 0.5 * t:g} mm > {inner:g} mm, the inside of the end)", key)
+            spans += _mirrored(x, 0.5 * t, key)
+        _spans_overlap(spans, "diaphragms", fail)
+    if not geo.supports:
+        raise fail("at least one support is required", "geometry.supports")
+    plates = []
+    for i, sup in enumerate(geo.supports):
+        key = f"geometry.supports[{i}]"
+        if sup.x > half + 1e-9:
+            raise fail(f"support at x = {sup.x:g} mm is off the wall (half length {half:g} mm)",
+                       key + ".x")
+        if sup.bearing_plate_width > 0:
+            if sup.x + 0.5 * sup.bearing_plate_width > half + 1e-9:
+                raise fail(f"bearing plate at x = {sup.x:g} mm sticks out beyond the wall end "
+                           f"{half:g} mm", key + ".bearing_plate_width")
+            plates += _mirrored(sup.x, 0.5 * sup.bearing_plate_width, key)
+    _spans_overlap(plates, "bearing plates", fail)
+    legs = []
+    for i, leg in enumerate(geo.legs):
+        key = f"geometry.legs[{i}]"
+        if leg.x + 0.5 * leg.length > half + 1e-9:
+            raise fail(f"leg at x = {leg.x:g} mm reaches beyond the wall end {half:g} mm", key)
+        legs += _mirrored(leg.x, 0.5 * leg.length, key)
+    _spans_overlap(legs, "legs", fail)
+    for a0, a1, key in plates:
+        for b0, b1, _ in legs:
+            if a0 < b1 and b0 < a1:
+                raise fail("a bearing plate overlaps a leg; support the leg instead", key)
+    if geo.model == "full" and not any(s.restraint == "pin" for s in geo.supports):
+        raise fail("a full model needs at least one 'pin' support to stop horizontal "
+                   "rigid-body motion", "geometry.supports")
+    patches = []
+    width = loads.patches.width
+    if not loads.patches.positions:
+        raise fail("at least one load patch is required", "loads.patches.positions")
+    for i, x in enumerate(loads.patches.positions):
+        key = f"loads.patches.positions[{i}]"
+        if x + 0.5 * width > half + 1e-9:
+            raise fail(f"load patch at x = {x:g} mm (width {width:g}) runs off the top plate "
+                       f"(half length {half:g} mm)", key)
+        patches += _mirrored(x, 0.5 * width, key)
+    _spans_overlap(patches, "load patches", fail)
+    if loads.control.x > half:
+        raise fail(f"control point x = {loads.control.x:g} mm is off the wall", "loads.control.x")
+    if loads.control.increment > loads.control.target:
+        raise fail("increment is larger than the target", "loads.control.increment")
+    if loads.measure.kind == "intensity" and loads.measure.tributary_length is None:
+        raise fail("kind 'intensity' needs tributary_length (the jack spacing)",
+                   "loads.measure.tributary_length")
+    if analysis.formulation == "axisymmetric" and geo.model == "full":
+        raise fail("an axisymmetric model is a half model (x = radius >= 0)", "geometry.model")
+    _check_mesh_size(deck, fail)
+    if len(set(deck.outputs.fields)) != len(deck.outputs.fields):
+        raise fail("a field is listed twice", "outputs.fields")
+
+
+def _check_mesh_size(deck: Deck, fail: ErrorFactory) -> None:
+    geo, size = deck.geometry, deck.analysis.element_size
+    if size > geo.depth:
+        raise fail(f"element size {size:g} mm exceeds the wall depth {geo.depth:g} mm; "
+                   "the core would have no interior", "analysis.element_size")
+    length = geo.half_length * (1 if geo.model == "half" else 2)
+    height = geo.depth + max([leg.height for leg in geo.legs], default=0.0)
+    estimate = (length / size + 1) * (height / size + 1)
+    if estimate > MAX_ELEMENTS:
+        raise fail(f"element size {size:g} mm gives about {estimate:.3g} elements "
+                   f"(limit {MAX_ELEMENTS:.0e}); is the unit mm?", "analysis.element_size")

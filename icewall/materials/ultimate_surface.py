@@ -1,0 +1,263 @@
+"""Willam-Warnke five-parameter ultimate surface and equivalent-uniaxial strengths/strains.
+
+Thesis §3.2.4-3.2.5 (eqs. 3.12-3.18) with the corrections of errata §1.1; calibration per
+errata §2. Conventions: tension positive, principal stresses sigma1 >= sigma2 >= sigma3 (rows
+are sorted here anyway), f'c > 0 a magnitude, units MPa.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+if TYPE_CHECKING:
+    from icewall.materials.parameters import ConcreteParameters
+
+SQ215 = float(np.sqrt(2.0 / 15.0))  # tau_bar / sigma for a uniaxial state
+Coef = tuple[float, float, float]
+
+
+def hydrostatic_points(f1: float = 1.45, f2: float = 1.725, sigma_h: float = float(np.sqrt(3.0))
+                       ) -> tuple[tuple[float, float], tuple[float, float]]:
+    """(sigma_bar, tau_bar) of the ANSYS-style high-compression points (all / f'c).
+
+    f1: equal-biaxial compression superposed on hydrostatic pressure sigma_h (tensile meridian);
+    f2: uniaxial compression superposed on sigma_h (compressive meridian). Errata §2.2 set B.
+    """
+    return ((-sigma_h - 2.0 * f1 / 3.0, SQ215 * f1), (-sigma_h - f2 / 3.0, SQ215 * f2))
+
+
+_P1, _P2 = hydrostatic_points()
+#: Errata §2.2 set B / §2.3 recommendation (f_t supplied by the user: the thesis' own f't).
+SET_B_CONTROL: dict[str, object] = {
+    "fcb_ratio": 1.20, "f1": _P1, "f2": _P2, "name": "B: ANSYS TB,CONCR defaults",
+    "source": "ANSYS TB,CONCR defaults attributed to Willam & Warnke (fcb=1.2, f1=1.45, "
+              "f2=1.725 on sigma_h=sqrt(3) f'c); errata §2.2 set B, refitted through f't"}
+
+
+def _poly(c: Coef, x: np.ndarray) -> np.ndarray:
+    return c[0] + c[1] * x + c[2] * x * x
+
+
+def _real_roots(c: Coef) -> list[float]:
+    r = np.roots([c[2], c[1], c[0]]) if abs(c[2]) > 1e-14 else np.roots([c[1], c[0]])
+    return [float(v.real) for v in np.atleast_1d(r) if abs(v.imag) < 1e-12]
+
+
+@dataclass(frozen=True)
+class WillamWarnkeSurface:
+    """Meridians r1 (tensile, theta = 0) = a0 + a1 s + a2 s^2 and r2 (compressive, 60 deg)
+    = b0 + b1 s + b2 s^2 in the tau_bar form, s = sigma_bar (eq. 3.18), normalised by f'c.
+
+    Below ``sigma_limit`` (the most compressive sigma_bar < -1/3 down to which r2/2 <= r1 <= r2
+    and r2 > 0 hold; or ``sigma_cut`` if given) both meridians are held at their values there:
+    an open cylinder, so rays such as hydrostatic compression never meet the surface. The
+    extension is outside the calibration; it is continuous but not convex at the joint.
+    """
+
+    a: Coef
+    b: Coef
+    name: str = ""
+    source: str = ""
+    sigma_cut: float | None = None
+    apex: float = field(init=False)
+    sigma_limit: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        a, b = self.a, self.b
+        pos = [x for x in _real_roots(a) if x > 0.0]
+        if a[0] <= 0.0 or b[0] <= 0.0 or not pos:
+            raise ValueError(f"surface {self.name!r}: meridians must be > 0 at the origin "
+                             "and r1 must close at a tensile apex")
+        object.__setattr__(self, "apex", min(pos))
+        diffs = [(a[0] - b[0], a[1] - b[1], a[2] - b[2]), b,
+                 (a[0] - b[0] / 2, a[1] - b[1] / 2, a[2] - b[2] / 2)]
+        lows = [x for c in diffs for x in _real_roots(c) if x < -1.0 / 3.0]
+        lim = max(lows) if lows else -np.inf
+        if self.sigma_cut is not None:
+            lim = max(lim, float(self.sigma_cut))
+        object.__setattr__(self, "sigma_limit", float(lim))
+
+    def meridians(self, sigma_bar: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """(r1, r2) at sigma_bar (eq. 3.18), held constant below ``sigma_limit``."""
+        s = np.maximum(np.asarray(sigma_bar, dtype=float), self.sigma_limit)
+        return _poly(self.a, s), _poly(self.b, s)
+
+    @classmethod
+    def from_control_points(cls, ft_ratio: float, fcb_ratio: float = 1.20,
+                            f1: tuple[float, float] = _P1, f2: tuple[float, float] = _P2,
+                            name: str = "", source: str = "",
+                            sigma_cut: float | None = None) -> WillamWarnkeSurface:
+        """Solve eq. 3.18: r1 through f't (uniaxial tension), f_cb (equal biaxial compression)
+        and f1 = (sigma_bar, tau_bar); r2 through f'c (uniaxial compression), f2 and the apex of
+        r1 (common apex). All values / f'c."""
+        pts1 = [(ft_ratio / 3.0, SQ215 * ft_ratio), (-2.0 * fcb_ratio / 3.0, SQ215 * fcb_ratio), f1]
+        a = np.linalg.solve([[1.0, x, x * x] for x, _ in pts1], [y for _, y in pts1])
+        apex = min(x for x in _real_roots(tuple(a)) if x > 0.0)
+        pts2 = [(-1.0 / 3.0, SQ215), f2, (apex, 0.0)]
+        b = np.linalg.solve([[1.0, x, x * x] for x, _ in pts2], [y for _, y in pts2])
+        return cls(tuple(map(float, a)), tuple(map(float, b)), name, source, sigma_cut)
+
+
+def default_surface(ft_ratio: float) -> WillamWarnkeSurface:
+    """Errata §2.3 default: set B control points refitted through f't/f'c = ``ft_ratio``."""
+    return WillamWarnkeSurface.from_control_points(ft_ratio, **SET_B_CONTROL)  # type: ignore[arg-type]
+
+
+#: Errata §2.2 set A, fixed coefficients (implied f_t = 0.100 f'c, f_cb = 1.210 f'c).
+SET_A_ELWI_MURRAY = WillamWarnkeSurface(
+    (0.053627, -0.512079, -0.038226), (0.095248, -0.891175, -0.244420),
+    name="A: Elwi & Murray (1979) fit to Schickert-Winkler",
+    source="Mander, Priestley & Park (1988), coefficients via Mander.py (P. Zhang); errata §2.2")
+
+
+def elwi_murray_refit(ft_ratio: float) -> WillamWarnkeSurface:
+    """Set A's meridian values at sigma_bar = -1.5 and f_cb = 1.21, refitted through f't."""
+    r1, r2 = SET_A_ELWI_MURRAY.meridians(-1.5)
+    return WillamWarnkeSurface.from_control_points(
+        ft_ratio, 1.21, (-1.5, float(r1)), (-1.5, float(r2)), name="A refitted to f't",
+        source=SET_A_ELWI_MURRAY.source)
+
+
+def _sorted(principal: ArrayLike) -> np.ndarray:
+    p = np.atleast_2d(np.asarray(principal, dtype=float))
+    return -np.sort(-p, axis=1)
+
+
+def octahedral_invariants(principal: ArrayLike, fc: float) -> tuple[np.ndarray, np.ndarray]:
+    """(sigma_bar, tau_bar): eq. 3.12a and eq. 3.12b corrected per errata §1.1,
+    tau_bar = sqrt(s_ij s_ij / 5) / f'c (uniaxial compression -> (-1/3, sqrt(2/15)))."""
+    p = _sorted(principal)
+    m = p.mean(axis=1)
+    dev = p - m[:, None]  # eq. 3.14
+    return m / fc, np.sqrt(np.sum(dev * dev, axis=1) / 5.0) / fc
+
+
+def lode_angle(principal: ArrayLike) -> np.ndarray:
+    """Angle of similarity theta in [0, 60 deg] (radians), eq. 3.13 corrected per errata §1.1:
+    cos theta = (2 s1 - s2 - s3) / (sqrt2 sqrt((s1-s2)^2 + (s2-s3)^2 + (s3-s1)^2)).
+    0 for uniaxial tension / equal biaxial compression, 60 deg for uniaxial compression.
+    Computed as atan2(sqrt3 (s2 - s3), 2 s1 - s2 - s3); hydrostatic states return 0."""
+    p = _sorted(principal)
+    s1, s2, s3 = p[:, 0], p[:, 1], p[:, 2]
+    # atan2 form of the same angle: |(x, y)| = sqrt2 sqrt(q), accurate near 0 and 60 deg
+    x, y = 2.0 * s1 - s2 - s3, np.sqrt(3.0) * (s2 - s3)
+    ok = np.hypot(x, y) > 1e-12 * np.max(np.abs(p), axis=1)
+    return np.where(ok, np.clip(np.arctan2(y, x), 0.0, np.pi / 3.0), 0.0)
+
+
+def meridian_radius(theta: ArrayLike, r1: ArrayLike, r2: ArrayLike, *,
+                    return_clamped: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Elliptic deviatoric trace r(theta), eq. 3.16 corrected per errata §1.1 (numerator
+    2 r2 (r2^2 - r1^2) cos theta), r12 of eq. 3.17. r(0) = r1, r(60 deg) = r2.
+
+    r1 is clamped into [r2/2, r2] (convexity; errata §3) and points so clamped are flagged.
+    Where r2 <= 0 (beyond the apex) r = min(r1, r2) <= 0, i.e. outside the surface.
+    """
+    th, r1a, r2a = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (theta, r1, r2)))
+    pos = r2a > 0.0
+    tol = 1e-12 * np.abs(r2a)
+    clamped = pos & ((r1a < 0.5 * r2a - tol) | (r1a > r2a + tol))
+    r1c = np.clip(r1a, 0.5 * r2a, r2a)
+    c = np.cos(th)
+    r12 = r2a * r2a - r1c * r1c  # eq. 3.17
+    rad = np.maximum(4.0 * r12 * c * c + 5.0 * r1c * r1c - 4.0 * r1c * r2a, 0.0)
+    num = 2.0 * r2a * r12 * c + r2a * (2.0 * r1c - r2a) * np.sqrt(rad)
+    den = 4.0 * r12 * c * c + (r2a - 2.0 * r1c) ** 2
+    r = np.where(pos, num / np.where(pos & (den > 0.0), den, 1.0), np.minimum(r1a, r2a))
+    return (r, clamped) if return_clamped else r
+
+
+def failure_function(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface
+                     ) -> np.ndarray:
+    """f = tau_bar - r(theta, sigma_bar) (eq. 3.15): < 0 inside, 0 on the surface."""
+    sb, tb = octahedral_invariants(principal, fc)
+    r1, r2 = surface.meridians(sb)
+    return tb - meridian_radius(lode_angle(principal), r1, r2)
+
+
+def strength_scale(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface,
+                   max_scale: float = 100.0, iterations: int = 60, *,
+                   return_capped: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """s > 0 with f(s sigma) = 0 on the proportional ray (vectorised bisection).
+
+    ``max_scale`` caps the strength point: max_i |s sigma_i| <= max_scale f'c. Rays that do not
+    meet the surface within it (hydrostatic compression, the open cylinder) return the cap, as
+    does a zero stress state (with |sigma| taken as 1e-12 f'c). Always finite. With
+    ``return_capped`` also returns the mask of capped rays (for warnings). Along a ray f is
+    convex up to ``sigma_limit`` and increasing beyond, so the root is unique.
+    """
+    p = _sorted(principal) / fc
+    mag = np.maximum(np.max(np.abs(p), axis=1), 1e-12)
+    d = p / mag[:, None]  # unit direction, max-norm 1
+    sb, tb = octahedral_invariants(d, 1.0)
+    th = lode_angle(d)
+
+    def f(t: np.ndarray) -> np.ndarray:
+        r1, r2 = surface.meridians(t * sb)
+        return t * tb - meridian_radius(th, r1, r2)
+
+    lo = np.zeros_like(mag)
+    hi = np.full_like(mag, float(max_scale))
+    meets = f(hi) >= 0.0
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        out = f(mid) >= 0.0
+        hi = np.where(out, mid, hi)
+        lo = np.where(out, lo, mid)
+    t = np.where(meets, 0.5 * (lo + hi), float(max_scale))
+    return (t / mag, ~meets) if return_capped else t / mag
+
+
+def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParameters, *,
+                                  strain_sign: ArrayLike | None = None, zero_tol: float = 1e-6,
+                                  max_scale: float = 100.0) -> np.ndarray:
+    """Signed sigma_ic (n,3) (negative = compression), in the columns' own order.
+
+    sigma_ic = s sigma_i on the proportional ray (§3.2.4), then the §3.2.5 mode rules read
+    with signed stresses (errata §3 "Sign convention"): (a) triaxial compression: from the
+    surface; (b) compression-tension: tension from the surface, compression at least f'c in
+    magnitude; (c) all-tension: tension at least f't. Components with |sigma_i| <= zero_tol
+    max|sigma| (e.g. sigma3 = 0 in plane stress) and all components of a zero state
+    (max|sigma| <= 1e-12 f'c) fall back to the uniaxial values (errata §3, "Using the strength
+    surface"): -f'c where ``strain_sign`` (e.g. sign of eps_iu) or else the stress is negative,
+    +f't otherwise. Mode counts use only the non-fallback components.
+    """
+    p = np.atleast_2d(np.asarray(principal, dtype=float))
+    fc, ft = params.fc, params.ft
+    s = np.asarray(strength_scale(p, fc, params.surface, max_scale=max_scale))
+    sic = s[:, None] * p
+    mag = np.max(np.abs(p), axis=1, keepdims=True)
+    zero = (np.abs(p) <= zero_tol * mag) | (mag <= 1e-12 * fc)
+    hint = p if strain_sign is None else np.broadcast_to(np.asarray(strain_sign, float), p.shape)
+    fallback = np.where(hint < 0.0, -fc, ft)
+    tens, comp = (p > 0.0) & ~zero, (p < 0.0) & ~zero
+    any_t = tens.any(axis=1, keepdims=True)
+    any_c = comp.any(axis=1, keepdims=True)
+    out = sic.copy()
+    out = np.where(comp & any_t, np.minimum(sic, -fc), out)  # rule (b)
+    out = np.where(tens & ~any_c, np.maximum(sic, ft), out)  # rule (c)
+    return np.where(zero, fallback, out)
+
+
+def equivalent_uniaxial_peak_strains(sigma_ic: ArrayLike, params: ConcreteParameters
+                                     ) -> np.ndarray:
+    """Signed eps_ic (n,3) for the signed strengths sigma_ic (errata §2.4 substitute for the
+    lost Elwi-Murray strain surface).
+
+    Compression, R = |sigma_ic|/f'c: eps_ic/eps_c = 1 + m (R - 1) for R >= 1 (m =
+    ``params.peak_strain_slope`` = 3: 3R - 2) and -1.6R^3 + 2.25R^2 + 0.35R for R < 1
+    (Darwin & Pecknold 1977 as quoted in errata §2.4; not re-verified). Tension:
+    eps_ic = eps_t sigma_ic / f't (linear branch). Finally |eps_ic| >= |sigma_ic|/E0, so that
+    R_E = E0 eps_ic / sigma_ic >= 1 (errata §2.4); where clamped the ascending branch is linear.
+    """
+    sig = np.atleast_2d(np.asarray(sigma_ic, dtype=float))
+    R = np.abs(sig) / params.fc
+    ratio = np.where(R >= 1.0, 1.0 + params.peak_strain_slope * (R - 1.0),
+                     (-1.6 * R + 2.25) * R * R + 0.35 * R)
+    mag = np.where(sig < 0.0, ratio * params.eps_c, sig * params.eps_t / params.ft)
+    mag = np.maximum(mag, np.abs(sig) / params.E0)
+    return np.where(sig < 0.0, -mag, mag)

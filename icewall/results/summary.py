@@ -1,0 +1,75 @@
+"""One-glance summary of a result file (used by ``icewall summary RESULT.h5 [--json]``)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from icewall.results.reader import open_result
+
+_NO_FINISH = "no finish record: run still going, or killed"
+
+
+def summarize(path: str | os.PathLike) -> dict:
+    """Key numbers of one analysis as a JSON-serialisable dict (None where there are no steps)."""
+    with open_result(path) as r:
+        a, h = r.attrs, r.history
+    status = str(a.get("status", ""))
+    reason = str(a.get("stop_reason", ""))
+    if status == "running" and not reason:
+        reason = _NO_FINISH
+    out = {
+        "path": os.fspath(path), "specimen": a.get("specimen"), "status": status,
+        "stop_reason": reason, "n_steps": int(len(h["step"])),
+        "max_load": None, "deflection_at_max_load": None, "final_load": None,
+        "final_deflection": None, "total_iterations": 0, "iterations_per_step_median": None,
+        "iterations_per_step_max": None, "run_time_s": a.get("run_time_s"),
+        "load_measure": a.get("load_measure"), "load_unit": a.get("load_unit"),
+    }
+    if out["n_steps"]:
+        load, defl, its = h["load"], h["control_displacement"], h["iterations"]
+        i = int(np.argmax(load))  # first step at the peak
+        out.update({
+            "max_load": float(load[i]), "deflection_at_max_load": float(defl[i]),
+            "final_load": float(load[-1]), "final_deflection": float(defl[-1]),
+            "total_iterations": int(its.sum()),
+            "iterations_per_step_median": float(np.median(its)),
+            "iterations_per_step_max": int(its.max()),
+        })
+    return out
+
+
+def _num(value, unit: str = "", fmt: str = ".6g") -> str:
+    if value is None:
+        return "-"
+    text = format(value, fmt) if isinstance(value, float) else str(value)
+    return f"{text} {unit}".rstrip()
+
+
+def format_summary(summary: dict) -> str:
+    """Human-readable block of aligned ``key : value unit`` lines."""
+    s = summary
+    lu = s.get("load_unit") or ""
+    measure = s.get("load_measure")
+    load_label = f"max load ({measure})" if measure else "max load"
+    iters = "-"
+    if s.get("iterations_per_step_max") is not None:
+        iters = (f"median {_num(s['iterations_per_step_median'], fmt='g')}, "
+                 f"max {s['iterations_per_step_max']}")
+    rows = [
+        ("file", s.get("path") or "-"),
+        ("specimen", s.get("specimen") or "-"),
+        ("status", s.get("status") or "-"),
+        ("stop reason", s.get("stop_reason") or "-"),
+        ("steps", _num(s.get("n_steps"))),
+        (load_label, _num(s.get("max_load"), lu)),
+        ("deflection at max load", _num(s.get("deflection_at_max_load"), "mm")),
+        ("final load", _num(s.get("final_load"), lu)),
+        ("final deflection", _num(s.get("final_deflection"), "mm")),
+        ("total iterations", _num(s.get("total_iterations"))),
+        ("iterations per step", iters),
+        ("run time", _num(s.get("run_time_s"), "s", ".1f")),
+    ]
+    width = max(len(k) for k, _ in rows)
+    return "\n".join(f"{k:<{width}} : {v}" for k, v in rows)

@@ -1,0 +1,269 @@
+"""Write one analysis to an HDF5 result file, step by step (layout: docs/hdf5_layout.md).
+
+The file is written as ``<path>.partial`` and flushed after every step, so a killed run leaves a
+readable file with every finished step; ``finish()`` renames it to ``<path>``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from datetime import datetime
+from numbers import Integral, Real
+
+import h5py
+import numpy as np
+
+import icewall
+from icewall.errors import ResultError
+from icewall.mesh.mesh import Mesh
+
+FORMAT, FORMAT_VERSION = "icewall-result", 1
+PARTIAL_SUFFIX = ".partial"
+INT_FILL = -1  # history value of an int column at steps where it was not given
+FLOAT_FILL = math.nan  # same for a float column (the only NaN ever written)
+RESERVED_ATTRS = ("format", "format_version", "software_version", "units", "length_unit",
+                  "force_unit", "stress_unit", "created", "status", "stop_reason", "run_time_s",
+                  "n_steps")
+# Core history columns: name -> (dtype, unit or None, description).
+CORE_COLUMNS = {
+    "step": ("i8", None, "step number, 1-based"),
+    "control_displacement": ("f8", "mm", "control displacement, positive in load direction"),
+    "load": ("f8", None, "load in the deck's load measure (root attrs load_measure, load_unit)"),
+    "load_factor": ("f8", None, "load factor"),
+    "iterations": ("i8", None, "equilibrium iterations of the step"),
+    "displacement_norm": ("f8", None, "final displacement convergence norm"),
+    "load_norm": ("f8", None, "final out-of-balance load norm"),
+    "wall_time": ("f8", "s", "wall-clock time since the start of the analysis"),
+}
+GAUSS_UNITS = {"stress": "MPa", "strain": "1"}
+STEP_COMPRESSION: dict = {}  # e.g. {"compression": "lzf"}; see docs/hdf5_layout.md (none chosen)
+
+
+@dataclass
+class StepRecord:
+    """One converged (or final) load step."""
+
+    step: int
+    control_displacement: float
+    load: float
+    load_factor: float
+    iterations: int
+    displacement_norm: float
+    load_norm: float
+    wall_time: float
+    displacement: np.ndarray | None = None  # (n_nodes, 2) mm, or None if not stored
+    gauss: dict[str, np.ndarray] = field(default_factory=dict)  # name -> (n_el, n_qp, k)
+    scalars: dict[str, float | int] = field(default_factory=dict)  # extra history columns
+
+
+def _check_name(name: str, what: str) -> None:
+    if not isinstance(name, str) or not name or "/" in name or name in (".", ".."):
+        raise ValueError(f"invalid {what} name {name!r} (non-empty, no '/')")
+
+
+def _finite_array(name: str, arr, shape: tuple | None = None) -> np.ndarray:
+    a = np.asarray(arr)
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{name}: unsupported dtype {a.dtype}")
+    if a.dtype.kind == "f" and not np.isfinite(a).all():
+        raise ValueError(f"{name}: contains NaN or inf")
+    if shape is not None and (a.ndim != len(shape) or any(
+            s is not None and s != n for s, n in zip(shape, a.shape, strict=True))):
+        want = tuple("*" if s is None else s for s in shape)
+        raise ValueError(f"{name}: shape {a.shape}, expected {want}")
+    return a
+
+
+def _scalar(name: str, value, integer: bool | None = None) -> int | float:
+    """Validate one history value; integer=True/False forces the column's kind."""
+    if isinstance(value, bool | np.bool_):
+        value = int(value)
+    if isinstance(value, Integral) and integer is not False:
+        return int(value)
+    if not isinstance(value, Real):
+        raise ValueError(f"{name}: not a real number: {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{name}: non-finite value {value}")
+    if integer:
+        if not value.is_integer():
+            raise ValueError(f"{name}: integer column got {value}")
+        return int(value)
+    return value
+
+
+def _write_mesh(g: h5py.Group, mesh: Mesh) -> None:
+    g.create_dataset("points", data=np.asarray(mesh.points, dtype=float)).attrs["unit"] = "mm"
+    g.create_dataset("cells", data=np.asarray(mesh.cells, dtype=np.int64))
+    g["cells"].attrs["cell_type"] = mesh.cell_type
+    g.create_dataset("cell_region", data=np.asarray(mesh.cell_region, dtype=np.int64))
+    r = g.create_group("regions")
+    r.create_dataset("name", data=[x.name for x in mesh.regions], dtype=h5py.string_dtype())
+    r.create_dataset("kind", data=[x.kind for x in mesh.regions], dtype=h5py.string_dtype())
+    r.create_dataset("tag", data=np.array([x.tag for x in mesh.regions], dtype=np.int64))
+    for grp, sets in (("node_sets", mesh.node_sets), ("edge_sets", mesh.edge_sets)):
+        sg = g.create_group(grp)
+        for name, ids in sets.items():
+            _check_name(name, grp[:-1].replace("_", " "))
+            sg.create_dataset(name, data=np.asarray(ids, dtype=np.int64))
+    i = g.create_group("interface")
+    i.create_dataset("pairs", data=np.asarray(mesh.interface_pairs, dtype=np.int64).reshape(-1, 2))
+    i.create_dataset("normals", data=np.asarray(mesh.interface_normals, float).reshape(-1, 2))
+    i.create_dataset("corner", data=np.asarray(mesh.interface_corner, dtype=bool))
+
+
+class ResultWriter:
+    """Context manager writing one analysis; see the module docstring and docs/hdf5_layout.md."""
+
+    def __init__(self, path: str | os.PathLike, *, deck_text: str, deck_path: str, mesh: Mesh,
+                 attrs: dict[str, str | float | int] | None = None) -> None:
+        self.path = os.fspath(path)
+        self.partial_path = self.path + PARTIAL_SUFFIX
+        attrs = dict(attrs or {})
+        for key, val in attrs.items():
+            _check_name(key, "attribute")
+            if key in RESERVED_ATTRS:
+                raise ValueError(f"attribute {key!r} is reserved")
+            if not isinstance(val, str):
+                attrs[key] = _scalar(f"attrs[{key!r}]", val)
+        directory = os.path.dirname(os.path.abspath(self.path))
+        why = (f"directory {directory} does not exist" if not os.path.isdir(directory) else
+               "it is a directory" if os.path.isdir(self.path) else
+               f"directory {directory} is not writable"
+               if not os.access(directory, os.W_OK | os.X_OK) else "")
+        if why:
+            raise ResultError(f"cannot write results to {self.path}: {why}")
+        try:
+            self._f = h5py.File(self.partial_path, "w")
+        except OSError as exc:
+            raise ResultError(f"cannot create result file {self.partial_path}: {exc}") from exc
+        self._t0, self._n, self._last_step, self._done = time.perf_counter(), 0, 0, False
+        self._n_nodes, self._n_cells = mesh.n_nodes, mesh.n_cells
+        self._columns: dict[str, bool] = {}  # extra history column -> is integer
+        try:
+            self._init_file(deck_text, deck_path, mesh, attrs)
+        except BaseException:
+            self._f.close()
+            os.remove(self.partial_path)
+            raise
+
+    def _init_file(self, deck_text: str, deck_path: str, mesh: Mesh, attrs: dict) -> None:
+        f = self._f
+        f.attrs.update({
+            "format": FORMAT, "format_version": FORMAT_VERSION,
+            "software_version": icewall.__version__, "units": "N, mm, MPa",
+            "length_unit": "mm", "force_unit": "N", "stress_unit": "MPa",
+            "created": datetime.now().astimezone().isoformat(timespec="seconds"),
+            "status": "running", "stop_reason": "", "run_time_s": 0.0, "n_steps": 0,
+        })
+        f.attrs.update(attrs)
+        f.create_dataset("deck", data=deck_text, dtype=h5py.string_dtype())
+        f["deck"].attrs["path"] = str(deck_path)
+        _write_mesh(f.create_group("mesh"), mesh)
+        hist = f.create_group("history")
+        for name, (dtype, unit, desc) in CORE_COLUMNS.items():
+            ds = hist.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(512,))
+            ds.attrs["description"] = desc
+            if name == "load" and isinstance(attrs.get("load_unit"), str):
+                unit = attrs["load_unit"]
+            if unit:
+                ds.attrs["unit"] = unit
+        f.create_group("steps")
+        f.flush()
+
+    # -- writing -----------------------------------------------------------------------------
+    def _validate(self, rec: StepRecord) -> tuple[dict, dict, dict]:
+        core = {name: _scalar(name, getattr(rec, name), integer=dtype == "i8")
+                for name, (dtype, _, _) in CORE_COLUMNS.items()}
+        if core["step"] < 1 or core["step"] <= self._last_step:
+            raise ValueError(f"step: {core['step']} is not > previous step {self._last_step}")
+        arrays = {}
+        if rec.displacement is not None:
+            arrays["displacement"] = _finite_array("displacement", rec.displacement,
+                                                   (self._n_nodes, 2))
+        for name, arr in rec.gauss.items():
+            _check_name(name, "gauss field")
+            arrays["gauss/" + name] = _finite_array(f"gauss[{name!r}]", arr,
+                                                    (self._n_cells, None, None))
+        extra = {}
+        for name, val in rec.scalars.items():
+            _check_name(name, "history column")
+            if name in CORE_COLUMNS:
+                raise ValueError(f"scalars[{name!r}]: clashes with a core history column")
+            extra[name] = _scalar(f"scalars[{name!r}]", val, self._columns.get(name))
+        return core, arrays, extra
+
+    def write_step(self, record: StepRecord) -> None:
+        """Validate the whole record (ValueError names the bad field), then append and flush."""
+        if self._done:
+            raise RuntimeError("write_step() after finish()")
+        core, arrays, extra = self._validate(record)
+        f, n = self._f, self._n
+        if arrays:
+            g = f["steps"].create_group(f"{core['step']:05d}")
+            g.attrs.update({k: core[k] for k in ("step", "control_displacement", "load",
+                                                 "load_factor")})
+            for name, a in arrays.items():
+                ds = g.create_dataset(name, data=a, **(STEP_COMPRESSION if a.size > 4096 else {}))
+                unit = "mm" if name == "displacement" else GAUSS_UNITS.get(name[6:])
+                if unit:
+                    ds.attrs["unit"] = unit
+        hist = f["history"]
+        for name, val in extra.items():
+            if name not in self._columns:
+                is_int = isinstance(val, int)
+                ds = hist.create_dataset(name, shape=(n,), maxshape=(None,), chunks=(512,),
+                                         dtype="i8" if is_int else "f8")
+                ds[:] = INT_FILL if is_int else FLOAT_FILL
+                ds.attrs.update({"fill_value": INT_FILL if is_int else FLOAT_FILL,
+                                 "first_step": core["step"]})
+                self._columns[name] = is_int
+        for name in list(CORE_COLUMNS) + list(self._columns):
+            if name in core:
+                val = core[name]
+            else:
+                val = extra.get(name, INT_FILL if self._columns[name] else FLOAT_FILL)
+            ds = hist[name]
+            ds.resize((n + 1,))
+            ds[n] = val
+        self._n, self._last_step = n + 1, core["step"]
+        f.attrs["n_steps"] = self._n  # readers trust history only up to n_steps
+        f.attrs["run_time_s"] = time.perf_counter() - self._t0
+        f.flush()
+
+    # -- closing -----------------------------------------------------------------------------
+    def finish(self, status: str = "completed", reason: str = "") -> str:
+        """Record the outcome, close, and return the file's path.
+
+        "completed"/"stopped" files are renamed to the final path; "failed" stays ``.partial``.
+        """
+        if status not in ("completed", "stopped", "failed"):
+            raise ValueError(f"status must be completed, stopped or failed, not {status!r}")
+        if self._done:
+            raise RuntimeError("finish() called twice")
+        self._done = True
+        try:
+            self._f.attrs.update({"status": status, "stop_reason": str(reason),
+                                  "run_time_s": time.perf_counter() - self._t0,
+                                  "n_steps": self._n})
+        finally:
+            self._f.close()
+        if status == "failed":
+            return self.partial_path
+        os.replace(self.partial_path, self.path)
+        return self.path
+
+    def __enter__(self) -> ResultWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        if self._done:
+            return False
+        if exc is None:
+            self.finish("completed")
+        else:
+            self.finish("failed", str(exc) or exc_type.__name__)
+        return False

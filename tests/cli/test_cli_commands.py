@@ -1,0 +1,90 @@
+"""The CLI as a user meets it: exit codes, one-line errors, files written."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jsonschema
+import yaml
+from click.testing import CliRunner
+
+from icewall.cli import main
+from icewall.deck.jsonschema import deck_json_schema
+
+ROOT = Path(__file__).resolve().parents[2]
+DECKS = ROOT / "decks"
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(main, list(args))
+
+
+def test_check_ok_and_broken(tmp_path):
+    ok = invoke("check", str(DECKS / "cf4.yaml"))
+    assert ok.exit_code == 0, ok.output
+    assert "ok" in ok.output
+    broken = tmp_path / "bad.yaml"
+    broken.write_text((DECKS / "cf4.yaml").read_text().replace("fc: 53.5", "fc: 53500"))
+    result = invoke("check", str(broken))
+    assert result.exit_code == 2
+    assert "Traceback" not in result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith(f"error: {broken}:")
+    assert "materials.concrete.fc" in lines[0]
+
+
+def test_run_then_summary(tmp_path):
+    out = tmp_path / "cf4.h5"
+    result = invoke("run", str(DECKS / "cf4.yaml"), "-o", str(out), "--quiet")
+    assert result.exit_code == 0, result.output
+    assert out.exists()
+    assert not Path(str(out) + ".partial").exists()
+    summary = invoke("summary", str(out), "--json")
+    assert summary.exit_code == 0, summary.output
+    data = json.loads(summary.output)
+    assert data["status"] == "completed"
+    assert data["n_steps"] == 40
+    assert data["final_deflection"] == 40.0
+    assert data["max_load"] == data["final_load"] > 0  # linear: the peak is at the end
+    text = invoke("summary", str(out))
+    assert "CF-4" in text.output
+
+
+def test_summary_of_missing_file_is_a_clean_error(tmp_path):
+    result = invoke("summary", str(tmp_path / "nope.h5"))
+    assert result.exit_code == 2
+    assert "Traceback" not in result.output
+
+
+def test_mesh_writes_files_and_reports_spacing(tmp_path):
+    result = invoke("mesh", str(DECKS / "cf4.yaml"), "--out", str(tmp_path))
+    assert result.exit_code == 0, result.output
+    for suffix in (".msh", ".vtu", ".xdmf"):
+        assert (tmp_path / f"cf4{suffix}").exists()
+    assert "h_c" in result.output and "core_1" in result.output
+    import meshio
+
+    m = meshio.read(tmp_path / "cf4.vtu")
+    assert m.cells[0].type == "quad8"
+
+
+def test_published_schema_is_current_and_accepts_shipped_decks():
+    published = json.loads((ROOT / "docs" / "deck.schema.json").read_text())
+    current = json.loads(json.dumps(deck_json_schema()))
+    assert published == current, "run `make schema` to refresh docs/deck.schema.json"
+    for path in DECKS.glob("*.yaml"):
+        jsonschema.validate(yaml.safe_load(path.read_text()), published)
+
+
+def test_schema_rejects_what_the_loader_rejects():
+    schema = deck_json_schema()
+    deck = yaml.safe_load((DECKS / "cf4.yaml").read_text())
+    deck["geometry"]["depht"] = 1.0
+    try:
+        jsonschema.validate(deck, schema)
+    except jsonschema.ValidationError as exc:
+        assert "depht" in str(exc)
+    else:
+        raise AssertionError("the schema accepted an unknown key")

@@ -1,0 +1,84 @@
+"""summarize() and format_summary() on synthetic load-deflection curves."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from icewall.errors import ResultError
+from icewall.mesh.mesh import Mesh, Region
+from icewall.results import ResultWriter, StepRecord, format_summary, summarize
+
+
+def one_cell_mesh() -> Mesh:
+    pts = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]])
+    return Mesh(points=pts, cells=np.array([[0, 1, 2, 3]]), cell_type="quad4",
+                cell_region=np.array([1]), regions=(Region("core", "concrete", 1),))
+
+
+def curve_file(path, n=41, peak_at=25, *, finish=("stopped", "load below 80% of peak")):
+    """Parabolic rise to a peak of 3.2 MPa at step `peak_at`, then softening."""
+    w = ResultWriter(path, deck_text="deck", deck_path="s.yaml", mesh=one_cell_mesh(),
+                     attrs={"specimen": "SCS-3", "load_measure": "w", "load_unit": "MPa"})
+    delta = 0.2 * np.arange(1, n + 1)
+    d_peak = 0.2 * peak_at
+    load = 3.2 - 0.004 * (delta - d_peak) ** 2 - 0.01 * np.clip(delta - d_peak, 0, None)
+    its = [2 + (i % 4) for i in range(n)]  # 2,3,4,5,2,...
+    for i in range(n):
+        w.write_step(StepRecord(i + 1, float(delta[i]), float(load[i]), float(load[i] / 3.2),
+                                its[i], 1e-8, 1e-7, 0.1 * (i + 1)))
+    if finish:
+        w.finish(*finish)
+    return w, delta, load, its
+
+
+def test_summary_of_known_peak(tmp_path):
+    _, delta, load, its = curve_file(tmp_path / "r.h5")
+    s = summarize(tmp_path / "r.h5")
+    assert s["specimen"] == "SCS-3" and s["status"] == "stopped"
+    assert s["stop_reason"] == "load below 80% of peak"
+    assert s["n_steps"] == 41
+    assert s["max_load"] == pytest.approx(3.2)
+    assert s["deflection_at_max_load"] == pytest.approx(5.0)  # step 25 * 0.2 mm
+    assert s["final_load"] == pytest.approx(load[-1]) and s["final_load"] < 3.2
+    assert s["final_deflection"] == pytest.approx(8.2)
+    assert s["total_iterations"] == sum(its)
+    assert s["iterations_per_step_median"] == pytest.approx(np.median(its))
+    assert s["iterations_per_step_max"] == 5
+    assert s["run_time_s"] >= 0
+    assert (s["load_measure"], s["load_unit"]) == ("w", "MPa")
+    assert json.loads(json.dumps(s)) == s  # plain JSON types only (for --json)
+
+
+def test_format_summary_block(tmp_path):
+    curve_file(tmp_path / "r.h5")
+    text = format_summary(summarize(tmp_path / "r.h5"))
+    lines = text.splitlines()
+    assert len({line.index(" : ") for line in lines}) == 1  # aligned
+    assert "max load (w)           : 3.2 MPa" in text
+    assert "deflection at max load : 5 mm" in text
+    assert "status                 : stopped" in text
+    assert "iterations per step    : median 3, max 5" in text
+
+
+def test_summary_of_empty_and_unfinished_runs(tmp_path):
+    w, *_ = curve_file(tmp_path / "empty.h5", n=0, finish=None)
+    s = summarize(str(tmp_path / "empty.h5") + ".partial")
+    assert s["n_steps"] == 0 and s["max_load"] is None and s["status"] == "running"
+    assert "killed" in s["stop_reason"]
+    assert "max load (w)" in format_summary(s)
+    w.finish()
+    script = ("import sys, os; sys.path.insert(0, {d!r});"
+              "from test_results_summary import curve_file;"
+              "curve_file({p!r}, n=10, peak_at=4, finish=None); os._exit(3)")
+    script = script.format(d=os.path.dirname(__file__), p=str(tmp_path / "killed.h5"))
+    assert subprocess.run([sys.executable, "-c", script]).returncode == 3
+    s = summarize(str(tmp_path / "killed.h5") + ".partial")
+    assert s["n_steps"] == 10 and s["deflection_at_max_load"] == pytest.approx(0.8)
+    with pytest.raises(ResultError):
+        summarize(tmp_path / "killed.h5")
