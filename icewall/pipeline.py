@@ -9,9 +9,10 @@ from pathlib import Path
 
 from icewall import __version__
 from icewall.deck.load import LoadedDeck
+from icewall.errors import ResultError
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
-from icewall.results.writer import ResultWriter, StepRecord
+from icewall.results.writer import ResultWriter, StepRecord, check_writable
 from icewall.solve.linear_static import run_linear
 
 
@@ -43,7 +44,11 @@ def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
     deck = loaded.deck
     say = progress or (lambda message: None)
     path = result_path(loaded, output)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ResultError(f"cannot create the output directory {path.parent}: {exc}") from None
+    check_writable(path)  # before any computing
     timings: dict[str, float] = {}
     start = time.perf_counter()
     mesh = build_mesh(deck)

@@ -7,21 +7,38 @@ from pathlib import Path
 import numpy as np
 
 from icewall.fem.kinematics import gauss_point_spacing
-from icewall.mesh.convert import meshio_name, to_meshio
+from icewall.mesh.convert import EDGE_TABLE, meshio_name, to_meshio
 from icewall.mesh.mesh import Mesh
 
-FORMATS = {"msh": ("gmsh", ".msh"), "vtu": ("vtu", ".vtu"), "xdmf": ("xdmf", ".xdmf")}
+FORMATS = {"msh": ("gmsh22", ".msh"), "vtu": ("vtu", ".vtu"), "xdmf": ("xdmf", ".xdmf")}
 
 
-def to_meshio_mesh(mesh: Mesh):
+def to_meshio_mesh(mesh: Mesh, gmsh_tags: bool = False, sets: bool = True):
+    """A meshio Mesh with one physical group per region, edge set (lines) and node set.
+
+    The group tag is cell data "set" (or gmsh:physical/gmsh:geometrical for .msh files);
+    `sets=False` keeps only the elements (XDMF readers handle one topology best).
+    """
     import meshio
 
     points = np.column_stack([mesh.points, np.zeros(mesh.n_nodes)])
-    cells = [(meshio_name(mesh.cell_type), to_meshio(mesh.cell_type, mesh.cells))]
-    region = mesh.cell_region.astype(np.int32) + 1
-    return meshio.Mesh(points, cells, cell_data={
-        "region": [region], "gmsh:physical": [region], "gmsh:geometrical": [region]},
-        field_data={r.name: np.array([r.tag + 1, 2]) for r in mesh.regions})
+    blocks = [(meshio_name(mesh.cell_type), to_meshio(mesh.cell_type, mesh.cells),
+               mesh.cell_region.astype(np.int32) + 1)]
+    field_data = {r.name: np.array([r.tag + 1, 2]) for r in mesh.regions}
+    tag = len(mesh.regions)
+    for name, edges in sorted(mesh.edge_sets.items()) if sets else ():
+        tag += 1
+        blocks.append((EDGE_TABLE[edges.shape[1]][1], edges, np.full(len(edges), tag)))
+        field_data[name] = np.array([tag, 1])
+    for name, nodes in sorted(mesh.node_sets.items()) if sets else ():
+        tag += 1
+        blocks.append(("vertex", nodes.reshape(-1, 1), np.full(len(nodes), tag)))
+        field_data[name] = np.array([tag, 0])
+    tags = [b[2].astype(np.int32) for b in blocks]
+    return meshio.Mesh(points, [(b[0], b[1]) for b in blocks],
+                       cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags}
+                       if gmsh_tags else {"set": tags},
+                       field_data=field_data)
 
 
 def write_mesh(mesh: Mesh, stem: str | Path, formats: list[str]) -> list[Path]:
@@ -33,12 +50,12 @@ def write_mesh(mesh: Mesh, stem: str | Path, formats: list[str]) -> list[Path]:
         raise ValueError(f"unknown mesh format(s) {unknown}; choose from {list(FORMATS)}")
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
-    m = to_meshio_mesh(mesh)
     written = []
     for fmt in formats:
         file_format, suffix = FORMATS[fmt]
         path = stem.with_suffix(suffix)
         kwargs = {"binary": False} if fmt == "msh" else {}
+        m = to_meshio_mesh(mesh, gmsh_tags=fmt == "msh", sets=fmt != "xdmf")
         meshio.write(path, m, file_format=file_format, **kwargs)
         written.append(path)
     return written

@@ -115,6 +115,18 @@ def _write_mesh(g: h5py.Group, mesh: Mesh) -> None:
     i.create_dataset("corner", data=np.asarray(mesh.interface_corner, dtype=bool))
 
 
+def check_writable(path: str | os.PathLike) -> None:
+    """Raise ResultError unless a result file can be created at `path`."""
+    path = os.fspath(path)
+    directory = os.path.dirname(os.path.abspath(path))
+    why = (f"directory {directory} does not exist" if not os.path.isdir(directory) else
+           "it is a directory" if os.path.isdir(path) else
+           f"directory {directory} is not writable"
+           if not os.access(directory, os.W_OK | os.X_OK) else "")
+    if why:
+        raise ResultError(f"cannot write results to {path}: {why}")
+
+
 class ResultWriter:
     """Context manager writing one analysis; see the module docstring and docs/hdf5_layout.md."""
 
@@ -129,13 +141,7 @@ class ResultWriter:
                 raise ValueError(f"attribute {key!r} is reserved")
             if not isinstance(val, str):
                 attrs[key] = _scalar(f"attrs[{key!r}]", val)
-        directory = os.path.dirname(os.path.abspath(self.path))
-        why = (f"directory {directory} does not exist" if not os.path.isdir(directory) else
-               "it is a directory" if os.path.isdir(self.path) else
-               f"directory {directory} is not writable"
-               if not os.access(directory, os.W_OK | os.X_OK) else "")
-        if why:
-            raise ResultError(f"cannot write results to {self.path}: {why}")
+        check_writable(self.path)
         try:
             self._f = h5py.File(self.partial_path, "w")
         except OSError as exc:

@@ -88,3 +88,17 @@ def test_schema_rejects_what_the_loader_rejects():
         assert "depht" in str(exc)
     else:
         raise AssertionError("the schema accepted an unknown key")
+
+
+def test_unwritable_output_fails_before_computing(tmp_path, monkeypatch):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a directory")
+    called = []
+    import icewall.pipeline as pipeline
+
+    monkeypatch.setattr(pipeline, "build_mesh", lambda deck: called.append(deck))
+    result = invoke("run", str(DECKS / "cf4.yaml"), "-o", str(blocker / "sub" / "r.h5"))
+    assert result.exit_code == 2
+    assert "cannot create the output directory" in result.output
+    assert "Traceback" not in result.output
+    assert called == []  # nothing was meshed or solved
