@@ -3,6 +3,10 @@
 Thesis §3.2.4-3.2.5 (eqs. 3.12-3.18) with the corrections of errata §1.1; calibration per
 errata §2. Conventions: tension positive, principal stresses sigma1 >= sigma2 >= sigma3 (rows
 are sorted here anyway), f'c > 0 a magnitude, units MPa.
+
+Default calibration (errata §2.3, set B through f't = 0.33 sqrt(f'c)): convex and r2/2 < r1 <= r2
+from the apex (sigma_bar ~ +0.04) down to sigma_bar = -2.35 (``sigma_limit``) for f'c = 20-120
+MPa. Its f1 point (sigma_bar = -2.70) lies beyond that limit and is not reproduced.
 """
 
 from __future__ import annotations
@@ -133,6 +137,7 @@ def octahedral_invariants(principal: ArrayLike, fc: float) -> tuple[np.ndarray, 
     p = _sorted(principal)
     m = p.mean(axis=1)
     dev = p - m[:, None]  # eq. 3.14
+    # eq. 3.12a; eq. 3.12b corrected per errata §1.1: sqrt(s_ij s_ij / 5) / f'c
     return m / fc, np.sqrt(np.sum(dev * dev, axis=1) / 5.0) / fc
 
 
@@ -143,7 +148,8 @@ def lode_angle(principal: ArrayLike) -> np.ndarray:
     Computed as atan2(sqrt3 (s2 - s3), 2 s1 - s2 - s3); hydrostatic states return 0."""
     p = _sorted(principal)
     s1, s2, s3 = p[:, 0], p[:, 1], p[:, 2]
-    # atan2 form of the same angle: |(x, y)| = sqrt2 sqrt(q), accurate near 0 and 60 deg
+    # eq. 3.13 corrected per errata §1.1 (2 s1 - s2 - s3, sqrt2 in the denominator), in atan2
+    # form: |(x, y)| = sqrt2 sqrt(q), so cos theta = x/|(x, y)|; accurate near 0 and 60 deg
     x, y = 2.0 * s1 - s2 - s3, np.sqrt(3.0) * (s2 - s3)
     ok = np.hypot(x, y) > 1e-12 * np.max(np.abs(p), axis=1)
     return np.where(ok, np.clip(np.arctan2(y, x), 0.0, np.pi / 3.0), 0.0)
@@ -161,10 +167,11 @@ def meridian_radius(theta: ArrayLike, r1: ArrayLike, r2: ArrayLike, *,
     pos = r2a > 0.0
     tol = 1e-12 * np.abs(r2a)
     clamped = pos & ((r1a < 0.5 * r2a - tol) | (r1a > r2a + tol))
-    r1c = np.clip(r1a, 0.5 * r2a, r2a)
+    r1c = np.clip(r1a, 0.5 * r2a, r2a)  # r1 = minimum radius (glossary corrected, errata §1.1)
     c = np.cos(th)
     r12 = r2a * r2a - r1c * r1c  # eq. 3.17
     rad = np.maximum(4.0 * r12 * c * c + 5.0 * r1c * r1c - 4.0 * r1c * r2a, 0.0)
+    # eq. 3.16 corrected per errata §1.1 (numerator 2 r2 (r2^2 - r1^2) cos theta, not 2 r1 r2)
     num = 2.0 * r2a * r12 * c + r2a * (2.0 * r1c - r2a) * np.sqrt(rad)
     den = 4.0 * r12 * c * c + (r2a - 2.0 * r1c) ** 2
     r = np.where(pos, num / np.where(pos & (den > 0.0), den, 1.0), np.minimum(r1a, r2a))
@@ -187,8 +194,9 @@ def strength_scale(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface
     ``max_scale`` caps the strength point: max_i |s sigma_i| <= max_scale f'c. Rays that do not
     meet the surface within it (hydrostatic compression, the open cylinder) return the cap, as
     does a zero stress state (with |sigma| taken as 1e-12 f'c). Always finite. With
-    ``return_capped`` also returns the mask of capped rays (for warnings). Along a ray f is
-    convex up to ``sigma_limit`` and increasing beyond, so the root is unique.
+    ``return_capped`` also returns the mask of capped rays (for warnings). f(0) < 0 and f
+    changes sign once along a ray (meridians concave down to ``sigma_limit``, constant beyond;
+    checked by the property test), so bisection on [0, cap] finds it.
     """
     p = _sorted(principal) / fc
     mag = np.maximum(np.max(np.abs(p), axis=1), 1e-12)
