@@ -7,6 +7,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from icewall import __version__
 from icewall.deck.load import LoadedDeck
 from icewall.errors import ResultError
@@ -27,6 +29,7 @@ class RunReport:
     n_elements: int
     n_equations: int
     timings: dict[str, float] = field(default_factory=dict)
+    reason: str = ""
 
 
 def result_path(loaded: LoadedDeck, output: str | Path | None = None) -> Path:
@@ -63,32 +66,84 @@ def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
              "gauss_order": deck.analysis.gauss, "solver": deck.analysis.solver,
              "load_measure": model.measure_name, "load_unit": model.measure_unit,
              "icewall_version": __version__}
-    solve_times: dict[str, float] = {}
-    n_steps, write_time = 0, 0.0
-    with ResultWriter(path, deck_text=loaded.text, deck_path=loaded.path, mesh=mesh,
-                      attrs=attrs) as writer:
-        want_fields = bool(fields & {"stress", "strain"})
-        for step in run_linear(model, want_fields=want_fields, timings=solve_times):
-            tic = time.perf_counter()
-            write_fields = step.step % deck.outputs.every == 0
-            gauss = {}
-            if write_fields:
-                gauss = {name: getattr(step, name) for name in ("stress", "strain")
-                         if name in fields}
-            writer.write_step(StepRecord(
-                step=step.step, control_displacement=step.control_displacement,
-                load=step.load, load_factor=step.load_factor, iterations=1,
-                displacement_norm=0.0, load_norm=0.0, wall_time=step.wall_time,
-                displacement=step.displacement if write_fields and "displacement" in fields
-                else None, gauss=gauss))
-            write_time += time.perf_counter() - tic
-            n_steps = step.step
-            say(f"  step {step.step:3d}  deflection {step.control_displacement:7.3f} mm  "
-                f"{model.measure_name} = {step.load:.5g} {model.measure_unit}")
-        timings.update(solve_times)
-        timings["write"] = write_time
+    writer = ResultWriter(path, deck_text=loaded.text, deck_path=loaded.path, mesh=mesh,
+                          attrs=attrs)
+    with writer:
+        if deck.analysis.solver == "linear":
+            n_steps = _write_linear(model, writer, fields, say, timings)
+            status, reason = "completed", ""
+        else:
+            n_steps, status, reason = _write_nonlinear(model, writer, fields, say, timings)
         timings["total"] = time.perf_counter() - start
-        final = writer.finish(status="completed")
-    return RunReport(path=str(final), status="completed", n_steps=n_steps,
+        final = writer.finish(status=status, reason=reason)
+    return RunReport(path=str(final), status=status, n_steps=n_steps, reason=reason,
                      n_nodes=mesh.n_nodes, n_elements=mesh.n_cells,
                      n_equations=model.dof_map.n_equations, timings=timings)
+
+
+def _fields_due(deck, step: int) -> bool:
+    return step % deck.outputs.every == 0
+
+
+def _write_linear(model, writer: ResultWriter, fields: set[str], say, timings) -> int:
+    deck, n_steps, write_time = model.deck, 0, 0.0
+    solve_times: dict[str, float] = {}
+    for step in run_linear(model, want_fields=bool(fields & {"stress", "strain"}),
+                           timings=solve_times):
+        tic = time.perf_counter()
+        due = _fields_due(deck, step.step)
+        gauss = {name: getattr(step, name) for name in ("stress", "strain")
+                 if due and name in fields}
+        writer.write_step(StepRecord(
+            step=step.step, control_displacement=step.control_displacement, load=step.load,
+            load_factor=step.load_factor, iterations=1, displacement_norm=0.0, load_norm=0.0,
+            wall_time=step.wall_time, gauss=gauss,
+            displacement=step.displacement if due and "displacement" in fields else None))
+        write_time += time.perf_counter() - tic
+        n_steps = step.step
+        say(f"  step {step.step:3d}  deflection {step.control_displacement:7.3f} mm  "
+            f"{model.measure_name} = {step.load:.5g} {model.measure_unit}")
+    timings.update(solve_times)
+    timings["write"] = write_time
+    return n_steps
+
+
+def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say,
+                     timings) -> tuple[int, str, str]:
+    from icewall.errors import ConvergenceError
+    from icewall.solve.nonlinear import run_nonlinear
+
+    deck, n_steps, write_time = model.deck, 0, 0.0
+    start = time.perf_counter()
+    status, reason = "completed", ""
+    try:
+        for n_steps, report in enumerate(run_nonlinear(model), start=1):
+            tic = time.perf_counter()
+            inc, ev = report.increment, report.increment.evaluation
+            due = _fields_due(deck, n_steps)
+            gauss = {name: getattr(ev, name) for name in ("stress", "strain")
+                     if due and name in fields}
+            if due and "state" in fields:
+                gauss.update(report.state_fields())
+            load = inc.load_factor * model.measure_factor
+            writer.write_step(StepRecord(
+                step=n_steps, control_displacement=inc.control_displacement, load=load,
+                load_factor=inc.load_factor, iterations=inc.iterations,
+                displacement_norm=min(inc.displacement_norm, 1e300), load_norm=inc.load_norm,
+                wall_time=time.perf_counter() - start, gauss=gauss,
+                displacement=report.displacement if due and "displacement" in fields else None,
+                scalars={**report.counts, **report.energy, "step_cuts": inc.cuts,
+                         "preload_stage": int(inc.kind == "preload"),
+                         "preload_factor": inc.preload_factor},
+                arrays=report.arrays if due else {},
+                forensics={k: np.asarray(v, dtype=np.int64) for k, v in inc.forensics.items()}))
+            write_time += time.perf_counter() - tic
+            say(f"  step {n_steps:3d} {inc.kind:8s} deflection {inc.control_displacement:7.3f} mm"
+                f"  {model.measure_name} = {load:.5g} {model.measure_unit}  "
+                f"({inc.iterations} it{', cut ' + str(inc.cuts) if inc.cuts else ''})")
+    except ConvergenceError as exc:
+        status, reason = "stopped", f"{exc.reason}: {exc}"
+        say(f"stopped after {n_steps} converged steps: {reason}")
+    timings["solve"] = time.perf_counter() - start - write_time
+    timings["write"] = write_time
+    return n_steps, status, reason

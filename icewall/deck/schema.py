@@ -141,6 +141,12 @@ class Steel:
     hardening: float = option(0.02, doc="hardening slope as a fraction of E_s (thesis 4.3.2)",
                               minimum=0.0, maximum=1.0)
     model: str = option("von_mises", doc="constitutive model", choices=("von_mises", "elastic"))
+    formulation: str = option("same", doc="same: the analysis formulation; plane_stress: "
+                              "plates free to expand out of plane while the concrete is plane "
+                              "strain (thesis 5.3, CF-8)", choices=("same", "plane_stress"))
+    fy_reduction: float = option(0.0, doc="fraction by which f_y is reduced (the thesis' "
+                                 "CF-8 work-around for plane-stress plates: 0.111)",
+                                 minimum=0.0, maximum=0.9)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -155,6 +161,8 @@ class Interface:
                         "bonded: steel and concrete share nodes", choices=("gap", "bonded"))
     friction: float = option(0.5773, doc="Coulomb friction coefficient (30 deg)", minimum=0.0,
                              maximum=2.0)
+    reset_slip_each_step: bool = option(True, doc="slipped pairs start every step fixed "
+                                        "(thesis 3.3.4)")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -209,8 +217,10 @@ class Loads:
 
 @dataclass(frozen=True, kw_only=True)
 class Analysis:
-    solver: str = option("linear", doc="linear: linear elasticity with the initial moduli",
-                         choices=("linear",))
+    solver: str = option("nonlinear", doc="nonlinear: the thesis model, displacement control "
+                         "(preceded by load control of any preload); linear: linear elasticity "
+                         "with the initial moduli, interface pairs tied",
+                         choices=("nonlinear", "linear"))
     formulation: str = option("plane_strain", doc="2D idealisation", choices=FORMULATIONS)
     element: str = option("quad8", doc="element type", choices=("quad8", "quad4"))
     gauss: int = option(3, doc="Gauss rule n x n", choices=(2, 3, 4))
@@ -221,6 +231,13 @@ class Analysis:
     tolerance_load: float = option(0.05, doc="load norm tolerance (eq. 4.5)",
                                    exclusive_minimum=0.0, maximum=1.0)
     max_iterations: int = option(200, doc="iteration limit per step", minimum=1)
+    max_step_cuts: int = option(4, doc="halvings of a failed increment before the run stops",
+                                minimum=0, maximum=20)
+    stiffness_update: str = option("every_iteration", doc="re-form the (secant) stiffness every "
+                                   "iteration (thesis) or once per step",
+                                   choices=("every_iteration", "every_step"))
+    preload_increments: int = option(5, doc="load-control increments of the in-plane preload",
+                                     minimum=1)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -95,6 +95,10 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
                    "loads.measure.tributary_length")
     if analysis.formulation == "axisymmetric" and geo.model == "full":
         raise fail("an axisymmetric model is a half model (x = radius >= 0)", "geometry.model")
+    if (deck.materials.steel.formulation == "plane_stress"
+            and analysis.formulation != "plane_strain"):
+        raise fail("plane-stress plates are an option of plane-strain analyses only",
+                   "materials.steel.formulation")
     _check_mesh_size(deck, fail)
     if len(set(deck.outputs.fields)) != len(deck.outputs.fields):
         raise fail("a field is listed twice", "outputs.fields")

@@ -126,6 +126,18 @@ class ResultFile:
                               f"(stored: {', '.join(self.gauss_fields(step)) or 'none'})")
         return g["gauss"][field][:]
 
+    def array(self, step: int, name: str) -> np.ndarray:
+        """Another per-step field, e.g. "interface/state", at `step`."""
+        g = self._step_group(step)
+        if name not in g:
+            raise ResultError(f"{self.path}: no array {name!r} at step {step}")
+        return g[name][:]
+
+    def forensics(self, step: int) -> dict[str, np.ndarray]:
+        """Per-iteration convergence forensics of `step` (empty if none were stored)."""
+        g = self._f.get(f"forensics/{step:05d}")
+        return {} if g is None else {name: ds[:] for name, ds in g.items()}
+
     def close(self) -> None:
         self._f.close()
 

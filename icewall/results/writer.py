@@ -57,6 +57,10 @@ class StepRecord:
     displacement: np.ndarray | None = None  # (n_nodes, 2) mm, or None if not stored
     gauss: dict[str, np.ndarray] = field(default_factory=dict)  # name -> (n_el, n_qp, k)
     scalars: dict[str, float | int] = field(default_factory=dict)  # extra history columns
+    # other per-step fields, e.g. "interface/state" (n_pairs,): stored with the fields
+    arrays: dict[str, np.ndarray] = field(default_factory=dict)
+    # per-iteration convergence forensics (1-D), stored for every step under /forensics
+    forensics: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def _check_name(name: str, what: str) -> None:
@@ -194,20 +198,35 @@ class ResultWriter:
             _check_name(name, "gauss field")
             arrays["gauss/" + name] = _finite_array(f"gauss[{name!r}]", arr,
                                                     (self._n_cells, None, None))
+        for name, arr in rec.arrays.items():
+            parts = name.split("/")
+            if len(parts) > 2 or parts[0] in ("gauss", "displacement"):
+                raise ValueError(f"arrays[{name!r}]: use 'group/name' outside gauss/")
+            for part in parts:
+                _check_name(part, "array")
+            arrays[name] = _finite_array(f"arrays[{name!r}]", arr)
+        forensics = {}
+        for name, arr in rec.forensics.items():
+            _check_name(name, "forensics array")
+            forensics[name] = _finite_array(f"forensics[{name!r}]", arr, (None,))
         extra = {}
         for name, val in rec.scalars.items():
             _check_name(name, "history column")
             if name in CORE_COLUMNS:
                 raise ValueError(f"scalars[{name!r}]: clashes with a core history column")
             extra[name] = _scalar(f"scalars[{name!r}]", val, self._columns.get(name))
-        return core, arrays, extra
+        return core, arrays, extra, forensics
 
     def write_step(self, record: StepRecord) -> None:
         """Validate the whole record (ValueError names the bad field), then append and flush."""
         if self._done:
             raise RuntimeError("write_step() after finish()")
-        core, arrays, extra = self._validate(record)
+        core, arrays, extra, forensics = self._validate(record)
         f, n = self._f, self._n
+        if forensics:
+            g = f.require_group("forensics").create_group(f"{core['step']:05d}")
+            for name, a in forensics.items():
+                g.create_dataset(name, data=a)
         if arrays:
             g = f["steps"].create_group(f"{core['step']:05d}")
             g.attrs.update({k: core[k] for k in ("step", "control_displacement", "load",

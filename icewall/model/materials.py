@@ -1,0 +1,157 @@
+"""Material groups of a model: which cells use which constitutive law, with what parameters.
+
+Every law is called the same way, `law(strain (n, 4), state, params) -> (stress, moduli,
+trial_state)`, over all Gauss points of its group at once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from icewall.deck.schema import Deck
+from icewall.materials.elastic import elastic_moduli
+from icewall.materials.parameters import ConcreteParameters, derive_concrete_parameters
+
+Law = Callable[[np.ndarray, Any, Any], tuple[np.ndarray, np.ndarray, Any]]
+
+
+@dataclass(frozen=True)
+class MaterialGroup:
+    """The cells of one deck material and the law that updates their Gauss points."""
+
+    name: str  # deck material key: concrete, steel, bearing_plates, legs
+    model: str  # elastic | rotating_crack | von_mises
+    cells: np.ndarray  # (n_cells,) element indices, sorted
+    law: Law
+    params: Any
+    initial_state: Any  # None for elastic groups
+
+
+@dataclass(frozen=True)
+class ElasticParameters:
+    moduli: np.ndarray  # (4, 4)
+
+
+def _elastic_law(strain: np.ndarray, state: None, params: ElasticParameters):
+    moduli = np.broadcast_to(params.moduli, strain.shape[:-1] + (4, 4))
+    return strain @ params.moduli.T, moduli, state
+
+
+@dataclass(frozen=True)
+class ConcretePointParameters:
+    """ConcreteParameters with the crack-band quantities per Gauss point (h_c, k_t, k_c)."""
+
+    fc: float
+    E0: float
+    ft: float
+    eps_c: float
+    eps_t: float
+    nu0: float
+    Gf: float
+    alpha: float
+    G_cr: float
+    h_c: np.ndarray
+    k_t: np.ndarray
+    k_c: np.ndarray
+    nu_max: float
+    surface: Any
+    peak_strain_slope: float
+
+
+def concrete_point_parameters(params: ConcreteParameters, h_c: np.ndarray,
+                              fixed_decay: dict[str, float]) -> ConcretePointParameters:
+    """Scale k_t, k_c (both proportional to h_c, eqs. 3.29, 3.34) to every point's h_c.
+
+    `fixed_decay` holds deck overrides of k_t / k_c, which then apply to every point as given.
+    """
+    values = {f.name: getattr(params, f.name) for f in fields(ConcreteParameters)}
+    scale = np.asarray(h_c, dtype=float) / params.h_c
+    values["h_c"] = np.asarray(h_c, dtype=float)
+    for key in ("k_t", "k_c"):
+        values[key] = (np.full_like(scale, fixed_decay[key]) if key in fixed_decay
+                       else getattr(params, key) * scale)
+    return ConcretePointParameters(**values)
+
+
+def concrete_parameters(deck: Deck, h_c: float) -> ConcreteParameters:
+    """The deck's concrete with every thesis 4.3.1 default and the deck's overrides."""
+    c = deck.materials.concrete
+    overrides: dict[str, Any] = {"eps_c": c.eps_c, "nu0": c.nu, "Gf": c.Gf,
+                                 "fcb_ratio": c.surface.biaxial_ratio}
+    for deck_key, key in (("E", "E0"), ("ft", "ft"), ("alpha", "alpha"), ("k_t", "k_t"),
+                          ("k_c", "k_c")):
+        if getattr(c, deck_key) is not None:
+            overrides[key] = getattr(c, deck_key)
+    overrides["f1"], overrides["f2"] = _surface_points(c.surface.f1_ratio, c.surface.f2_ratio)
+    if "k_t" in overrides:
+        overrides.pop("Gf")
+    return derive_concrete_parameters(c.fc, h_c, **overrides)
+
+
+def _surface_points(f1_ratio: float, f2_ratio: float):
+    from icewall.materials.ultimate_surface import hydrostatic_points
+
+    return hydrostatic_points(f1=f1_ratio, f2=f2_ratio)
+
+
+def build_groups(deck: Deck, cell_material: np.ndarray, gauss_spacing: np.ndarray,
+                 n_gauss_points: int, linear: bool = False) -> tuple[MaterialGroup, ...]:
+    """One group per deck material present in the mesh; `linear` makes every law elastic."""
+    formulation = deck.analysis.formulation
+    groups = []
+    for name in ("concrete", "steel", "bearing_plates", "legs"):
+        cells = np.flatnonzero(cell_material == name)
+        if cells.size == 0:
+            continue
+        n_points = cells.size * n_gauss_points
+        if name == "concrete":
+            params = concrete_parameters(deck, float(np.mean(gauss_spacing[cells])))
+            model = deck.materials.concrete.model
+            if model == "rotating_crack" and not linear:
+                groups.append(_concrete_group(deck, cells, params, gauss_spacing, n_gauss_points))
+                continue
+            E, nu = params.E0, deck.materials.concrete.nu
+        elif name == "steel":
+            steel = deck.materials.steel
+            if steel.model == "von_mises" and not linear:
+                groups.append(_steel_group(deck, cells, n_points))
+                continue
+            E, nu, model = steel.E, steel.nu, "elastic"
+        else:
+            props = getattr(deck.materials, name)
+            E, nu, model = props.E, props.nu, "elastic"
+        groups.append(MaterialGroup(name, "elastic", cells, _elastic_law,
+                                    ElasticParameters(elastic_moduli(E, nu, formulation)), None))
+    return tuple(groups)
+
+
+def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
+                    gauss_spacing: np.ndarray, n_gauss_points: int) -> MaterialGroup:
+    from icewall.materials.concrete import ConcreteState, update_concrete
+
+    c = deck.materials.concrete
+    fixed = {key: getattr(c, key) for key in ("k_t", "k_c") if getattr(c, key) is not None}
+    h_points = np.repeat(gauss_spacing[cells], n_gauss_points)
+    point_params = concrete_point_parameters(params, h_points, fixed)
+    formulation = deck.analysis.formulation
+
+    def law(strain, state, p):
+        return update_concrete(strain, state, p, formulation)
+
+    return MaterialGroup("concrete", "rotating_crack", cells, law, point_params,
+                         ConcreteState.initial(h_points.size, params))
+
+
+def _steel_group(deck: Deck, cells: np.ndarray, n_points: int) -> MaterialGroup:
+    from icewall.materials.steel import SteelState, steel_parameters, update_steel
+
+    s = deck.materials.steel
+    formulation = deck.analysis.formulation if s.formulation == "same" else s.formulation
+    params = steel_parameters(s.E, s.nu, s.fy, hardening_ratio=s.hardening,
+                              formulation=formulation, fy_reduction=s.fy_reduction)
+    return MaterialGroup("steel", "von_mises", cells, update_steel, params,
+                         SteelState.initial(n_points))

@@ -1,0 +1,82 @@
+"""Internal forces and (secant) stiffness of the whole mesh for given nodal displacements.
+
+Material states are immutable: `evaluate` returns trial states; the solver keeps the
+committed ones and commits trial states only on a converged increment. Elastic groups cost
+their B^T D B once; only nonlinear groups are recomputed per iteration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from icewall.fem.assembly import Assembler
+from icewall.fem.kinematics import (
+    ElementKinematics,
+    internal_force_blocks,
+    stiffness_blocks,
+    strain,
+)
+from icewall.model.materials import MaterialGroup
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Everything one pass over the Gauss points gives."""
+
+    strain: np.ndarray  # (n_el, nq, 4)
+    stress: np.ndarray  # (n_el, nq, 4)
+    moduli: np.ndarray  # (n_el, nq, 4, 4)
+    internal_force: np.ndarray  # (n_eq,)
+    states: tuple[Any, ...]  # trial state per group
+
+
+class Structure:
+    """The assembled solid: kinematics, assembler and material groups."""
+
+    def __init__(self, kinematics: ElementKinematics, assembler: Assembler,
+                 groups: tuple[MaterialGroup, ...]) -> None:
+        self.kinematics, self.assembler, self.groups = kinematics, assembler, groups
+        self.n_elements, self.n_gauss = kinematics.dV.shape
+        self._group_kinematics = tuple(
+            replace(kinematics, B=kinematics.B[g.cells], dV=kinematics.dV[g.cells],
+                    x=kinematics.x[g.cells], dofs=kinematics.dofs[g.cells],
+                    detJ=kinematics.detJ[g.cells]) for g in groups)
+        nd = kinematics.B.shape[-1]
+        self._blocks = np.zeros((self.n_elements, nd, nd))
+        for group, kin in zip(groups, self._group_kinematics, strict=True):
+            if group.model == "elastic":
+                self._blocks[group.cells] = stiffness_blocks(kin, group.params.moduli)
+
+    def initial_states(self) -> tuple[Any, ...]:
+        return tuple(g.initial_state for g in self.groups)
+
+    @property
+    def nonlinear(self) -> bool:
+        return any(g.model != "elastic" for g in self.groups)
+
+    def evaluate(self, u: np.ndarray, states: tuple[Any, ...]) -> Evaluation:
+        """Strains, stresses, moduli and internal forces at equation vector `u`."""
+        eps = strain(self.kinematics, u)
+        stress = np.empty_like(eps)
+        moduli = np.empty(eps.shape + (4,))
+        trial = []
+        for group, state in zip(self.groups, states, strict=True):
+            n = group.cells.size * self.n_gauss
+            sig, D, new = group.law(eps[group.cells].reshape(n, 4), state, group.params)
+            stress[group.cells] = sig.reshape(-1, self.n_gauss, 4)
+            moduli[group.cells] = np.broadcast_to(D, (n, 4, 4)).reshape(-1, self.n_gauss, 4, 4)
+            trial.append(new)
+        f_int = self.assembler.vector(internal_force_blocks(self.kinematics, stress))
+        return Evaluation(eps, stress, moduli, f_int, tuple(trial))
+
+    def stiffness(self, evaluation: Evaluation) -> sp.csr_matrix:
+        """Global stiffness from the moduli of `evaluation` (secant or tangent, per law)."""
+        blocks = self._blocks
+        for group, kin in zip(self.groups, self._group_kinematics, strict=True):
+            if group.model != "elastic":
+                blocks[group.cells] = stiffness_blocks(kin, evaluation.moduli[group.cells])
+        return self.assembler.matrix(blocks)

@@ -1,0 +1,213 @@
+"""Path following: load control of the preload (Newton-Raphson with the secant stiffness) and
+displacement control (thesis 3.5, eqs. 3.44-3.50, Fig. 3.18 with errata 1.3), each a generator
+of converged increments so that the writer keeps every converged step on disk.
+
+Each iteration factorises one matrix and solves it for two right-hand sides: the reference
+load R* (3.46) and the unbalance dQ plus the interface rows (3.45); the load-factor increment
+follows from eq. 3.48 with the remaining control increment (errata §3: it reduces to 3.49 on
+the first iteration and 3.50 afterwards, and absorbs a non-zero first residual).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from icewall.errors import ConvergenceError
+from icewall.model.structure import Evaluation, Structure
+from icewall.solve.settings import SolverSettings
+
+# A converged increment whose load falls by more than this fraction of the largest load so
+# far is suspect: on a continuous branch the drop shrinks with the step; at a snap-back of the
+# control displacement it does not (the solver found a distant equilibrium). Halve the step;
+# if the drop persists at the smallest step, stop with reason "snap-back".
+SNAP_BACK_DROP = 0.25
+
+
+@dataclass
+class PathState:
+    """Committed solution: displacements, load factor (jack load P, N), material states."""
+
+    u: np.ndarray
+    load_factor: float
+    states: tuple[Any, ...]
+    evaluation: Evaluation | None = None
+    preload_factor: float = 0.0  # fraction of the in-plane preload applied
+    load_scale: float = 0.0  # largest external-load norm reached: the eq. 4.5 reference
+
+
+@dataclass
+class Increment:
+    """A converged increment as the writer and the reporting need it."""
+
+    kind: str  # "preload" | "control"
+    control_displacement: float
+    load_factor: float
+    preload_factor: float
+    iterations: int
+    displacement_norm: float
+    load_norm: float
+    evaluation: Evaluation
+    u: np.ndarray
+    forensics: dict[str, list[int]] = field(default_factory=dict)
+    cuts: int = 0
+    wall_time: float = 0.0
+
+
+class StepFailed(Exception):
+    """An increment did not converge (reason in .reason); the caller may cut the step."""
+
+    def __init__(self, message: str, reason: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+@dataclass(frozen=True)
+class Problem:
+    structure: Structure
+    constraints: Any  # SupportConstraints or GapConstraints
+    reference_load: np.ndarray  # R*, unit jack load on every patch (n_eq,)
+    preload: np.ndarray | None  # in-plane load vector (n_eq,), held during control
+    control_equation: int  # deflection = -u[control_equation]
+    flag_counter: Any  # callable(states) -> bool array of crack/crush/yield flags
+
+
+def _norm(x: np.ndarray) -> float:
+    return float(np.sqrt(x @ x))
+
+
+def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
+             target_deflection: float | None, preload_factor: float) -> Increment:
+    """Iterate one increment to convergence. target_deflection None means load control."""
+    s, c = problem.structure, problem.constraints
+    u, P = start.u.copy(), start.load_factor
+    R = c.restrict(problem.reference_load)
+    F_pre = np.zeros_like(u) if problem.preload is None else preload_factor * problem.preload
+    c.begin_step()
+    forensics: dict[str, list[int]] = {"gauss_flag_changes": [], "gap_flips": []}
+    flags_before = problem.flag_counter(start.states)
+    disp_norm = load_norm = math.inf
+    flips = 0
+    factor = None
+    for iteration in range(1, settings.max_iterations + 1):
+        ev = s.evaluate(u, start.states)
+        if not np.all(np.isfinite(ev.internal_force)):
+            raise StepFailed("non-finite internal forces", "NaN")
+        flags = problem.flag_counter(ev.states)
+        forensics["gauss_flag_changes"].append(int(np.count_nonzero(flags != flags_before)))
+        flags_before = flags
+        external = P * R + c.restrict(F_pre)
+        unbalance = c.restrict(external - ev.internal_force - c.constraint_force())
+        # eq. 4.5; the reference is the largest load reached, so that the norm stays
+        # meaningful when the load falls towards zero far down the descending branch
+        scale = max(_norm(external), start.load_scale, 1e-30)
+        load_norm = _norm(unbalance) / scale
+        # The predictor is not a correction: after it only the load norm can be judged, so it
+        # must be met 100 times tighter (a linear problem then converges in one iteration).
+        displacement_ok = disp_norm <= settings.tolerance_displacement or (
+            iteration == 2 and load_norm <= 0.01 * settings.tolerance_load)
+        if (iteration > 1 and displacement_ok and load_norm <= settings.tolerance_load
+                and flips == 0):
+            return Increment("control" if target_deflection is not None else "preload",
+                             -float(u[problem.control_equation]), P, preload_factor,
+                             iteration - 1, disp_norm, load_norm, ev, u, forensics)
+        if factor is None or settings.stiffness_update == "every_iteration" or flips:
+            factor = c.factorize(s.stiffness(ev))
+        rhs_unbalance = c.unbalance_rhs(unbalance, u)
+        if target_deflection is None:
+            du, dm = c.split(factor.solve(rhs_unbalance))
+            dP = 0.0
+        else:
+            solution = factor.solve(np.column_stack([c.reference_rhs(problem.reference_load),
+                                                     rhs_unbalance]))
+            (q1, q2), (m1, m2) = (c.split(solution)[0].T, c.split(solution)[1].T)
+            control_1 = -q1[problem.control_equation]
+            if not abs(control_1) > 0.0 or not math.isfinite(control_1):
+                raise StepFailed("the reference load no longer moves the control point",
+                                 "snap-back")
+            remaining = target_deflection + u[problem.control_equation]  # = target - deflection
+            dP = (remaining + q2[problem.control_equation]) / control_1  # eq. 3.48
+            du = dP * q1 + q2
+            dm = dP * m1 + m2
+        if not (np.all(np.isfinite(du)) and math.isfinite(dP)):
+            raise StepFailed("non-finite displacement correction", "NaN")
+        u = u + du
+        P = P + dP
+        flips = c.apply(dm, u)
+        forensics["gap_flips"].append(int(flips))
+        disp_norm = _norm(du) / max(_norm(u), 1e-30)  # eq. 4.4
+    raise StepFailed(f"no convergence in {settings.max_iterations} iterations (displacement "
+                     f"norm {disp_norm:.3g}, load norm {load_norm:.3g})", "non-convergence")
+
+
+def _advance(problem: Problem, settings: SolverSettings, state: PathState, target, preload,
+             step_size: float, kind: str) -> Iterator[tuple[Increment, PathState]]:
+    """Reach `target` (deflection or preload fraction) from `state`, halving failed steps."""
+    c = problem.constraints
+    smallest = step_size / 2 ** settings.max_step_cuts * (1 + 1e-9)
+    current = (-float(state.u[problem.control_equation]) if kind == "control"
+               else state.preload_factor)
+    size = step_size
+    peak_load = state.load_factor
+    while current < target - 1e-12 * max(1.0, abs(target)):
+        goal = min(current + size, target)
+        tic = time.perf_counter()
+        try:
+            if kind == "control":
+                inc = _iterate(problem, settings, state, goal, preload)
+            else:
+                inc = _iterate(problem, settings, state, None, goal)
+        except (StepFailed, ConvergenceError) as exc:
+            c.rollback()
+            reason = getattr(exc, "reason", "non-convergence")
+            if size <= smallest:
+                raise ConvergenceError(f"{exc} at {kind} {goal:.4g} after "
+                                       f"{settings.max_step_cuts} step cuts",
+                                       reason=reason) from None
+            size = 0.5 * size
+            continue
+        if kind == "control" and _abrupt_drop(state, inc, peak_load):
+            c.rollback()
+            if size <= smallest:
+                raise ConvergenceError(
+                    f"snap-back at the control point: the load drops from {state.load_factor:.4g}"
+                    f" to {inc.load_factor:.4g} within {goal - current:.3g} mm and the drop does "
+                    f"not shrink with the step ({settings.max_step_cuts} cuts); displacement "
+                    "control cannot follow this branch", reason="snap-back") from None
+            size = 0.5 * size
+            continue
+        c.commit()
+        peak_load = max(peak_load, inc.load_factor)
+        inc.cuts = round(math.log2(step_size / size))
+        inc.wall_time = time.perf_counter() - tic
+        scale = max(state.load_scale, _norm(c.restrict(
+            inc.load_factor * problem.reference_load
+            + (0.0 if problem.preload is None else inc.preload_factor * problem.preload))))
+        state = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
+                          inc.preload_factor, scale)
+        current = goal
+        yield inc, state
+        size = min(step_size, 2.0 * size)  # grow back after a successful cut step
+
+
+def _abrupt_drop(state: PathState, inc: Increment, peak_load: float) -> bool:
+    return (peak_load > 0.0 and inc.load_factor < state.load_factor
+            and state.load_factor - inc.load_factor > SNAP_BACK_DROP * peak_load)
+
+
+def follow_path(problem: Problem, settings: SolverSettings,
+                initial: PathState) -> Iterator[tuple[Increment, PathState]]:
+    """Preload by load control (if any), then displacement control to the target."""
+    current = initial
+    if problem.preload is not None:
+        for inc, current in _advance(problem, settings, initial, 1.0, None,
+                                     1.0 / settings.preload_increments, "preload"):
+            yield inc, current
+    preload = 1.0 if problem.preload is not None else 0.0
+    yield from _advance(problem, settings, current, settings.target, preload,
+                        settings.increment, "control")

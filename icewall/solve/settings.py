@@ -1,0 +1,30 @@
+"""Solver settings taken from a deck, with the thesis' choices as the reference."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from icewall.deck.schema import Deck
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    tolerance_displacement: float  # eq. 4.4
+    tolerance_load: float  # eq. 4.5
+    max_iterations: int
+    max_step_cuts: int  # halvings of a failed increment before the run stops
+    stiffness_update: str  # every_iteration | every_step
+    increment: float  # control displacement increment, mm
+    target: float  # final control displacement, mm
+    preload_increments: int  # load-control increments of the in-plane preload
+    reset_slip_each_step: bool  # thesis 3.3.4: slipped pairs start each step fixed
+
+
+def solver_settings(deck: Deck) -> SolverSettings:
+    a, c = deck.analysis, deck.loads.control
+    return SolverSettings(
+        tolerance_displacement=a.tolerance_displacement, tolerance_load=a.tolerance_load,
+        max_iterations=a.max_iterations, max_step_cuts=a.max_step_cuts,
+        stiffness_update=a.stiffness_update, increment=c.increment, target=c.target,
+        preload_increments=a.preload_increments,
+        reset_slip_each_step=deck.materials.interface.reset_slip_each_step)

@@ -1,0 +1,64 @@
+"""Displacement control against closed forms: a linear problem, a softening bar, snap-back."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from softening_bar import bar_problem, settings
+
+from icewall.errors import ConvergenceError
+from icewall.solve.control import follow_path
+
+
+def analytic_softening_load(deflection, length, h, E, f_weak, failure_strain, area=10.0):
+    """P(delta) of a bar with one softening element of length h (linear softening)."""
+    peak_strain = f_weak / E
+    delta_peak = length * peak_strain
+    if deflection <= delta_peak:
+        return E * deflection / length * area
+    # delta = (L - h) sigma / E + h (eps0 + (f - sigma)/f (eps_f - eps0))
+    slope = (length - h) / E - h * (failure_strain - peak_strain) / f_weak
+    sigma = (deflection - h * failure_strain) / slope
+    return sigma * area
+
+
+def test_softening_bar_follows_its_descending_branch():
+    length, n_el, E, f, weak, eps_f = 100.0, 10, 30000.0, 3.0, 0.9, 0.002
+    problem, initial = bar_problem(length, n_el, E, f, weak, eps_f)
+    loads, deflections, iterations = [], [], []
+    # peak at 0.009 mm, the weak element is fully softened at h eps_f = 0.02 mm
+    for inc, _ in follow_path(problem, settings(0.019, 0.001), initial):
+        loads.append(inc.load_factor)
+        deflections.append(inc.control_displacement)
+        iterations.append(inc.iterations)
+    deflections, loads = np.array(deflections), np.array(loads)
+    assert deflections[-1] == pytest.approx(0.019)
+    expected = [analytic_softening_load(d, length, length / n_el, E, weak * f, eps_f)
+                for d in deflections]
+    assert np.allclose(loads, expected, rtol=1e-5, atol=1e-6 * max(expected))
+    peak = int(np.argmax(loads))
+    assert 0 < peak < len(loads) - 1  # peak traced, then the descending branch
+    assert np.all(np.diff(loads[peak:]) < 0)
+
+
+def test_linear_bar_converges_in_one_iteration():
+    problem, initial = bar_problem(100.0, 5, strength=1e9)  # never softens
+    for inc, _ in follow_path(problem, settings(0.05, 0.01), initial):
+        assert inc.iterations == 1
+        assert inc.load_factor == pytest.approx(30000.0 * inc.control_displacement / 100 * 10)
+
+
+def test_snap_back_is_reported_not_mis_solved():
+    # (L - h)/E > h (eps_f - eps0)/f: the softening branch turns back in the end displacement
+    problem, initial = bar_problem(1000.0, 10, failure_strain=0.0003)
+    converged = []
+    with pytest.raises(ConvergenceError) as info:
+        for inc, _ in follow_path(problem, settings(0.5, 0.02, iterations=200, cuts=3),
+                                  initial):
+            converged.append(inc)
+    assert info.value.reason == "snap-back"
+    assert converged  # the steps before the snap-back were delivered
+    # every delivered step is a genuine equilibrium of the ascending branch
+    for inc in converged:
+        assert inc.load_factor == pytest.approx(30000.0 * inc.control_displacement / 1000 * 10,
+                                                rel=1e-6)
