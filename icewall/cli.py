@@ -115,6 +115,72 @@ def summary(result: str, as_json: bool) -> None:
 
 
 @main.command()
+@click.argument("deck", type=click.Path(dir_okay=False))
+@click.option("--set", "overrides", multiple=True, help=SET_HELP)
+@click.option("--json", "as_json", is_flag=True, help="Print the rows as JSON.")
+@_handle_errors
+def params(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
+    """Derived concrete parameters per region (E, f't, eps_c, G_f, G_cr, alpha, h_c, k_t, k_c),
+    to check against the thesis' Table 4.4 before running; warns where h_c is too large for
+    the crack band (snap-back of the softening branch)."""
+    from icewall.deck.load import load_deck
+    from icewall.mesh.build import build_mesh
+    from icewall.model.params_report import concrete_parameter_rows, format_parameter_rows
+
+    loaded = load_deck(deck, overrides)
+    rows = concrete_parameter_rows(loaded.deck, build_mesh(loaded.deck))
+    if as_json:
+        click.echo(json.dumps(rows, indent=2))
+    else:
+        click.echo(format_parameter_rows(rows))
+    for row in rows:
+        for warning in row["warnings"]:
+            click.echo(f"warning: {row['region']}: {warning}", err=True)
+
+
+@main.command()
+@click.option("--fc", type=float, required=True, help="Uniaxial compressive strength f'c (MPa).")
+@click.option("--h-c", "h_c", type=float, default=100.0, show_default=True,
+              help="Crack-band width h_c (mm) for k_t, k_c (eqs. 3.29, 3.34).")
+@click.option("--path", "path", default="uniaxial-compression", show_default=True,
+              help="uniaxial-compression | uniaxial-tension | biaxial:R | biaxial-tension:R | "
+                   "biaxial-strain:R | pure-shear | rotating")
+@click.option("--formulation", default="plane_stress", show_default=True,
+              type=click.Choice(["plane_stress", "plane_strain", "axisymmetric"]))
+@click.option("--steps", type=click.IntRange(1), default=400, show_default=True)
+@click.option("--max-strain", type=float, default=0.006, show_default=True,
+              help="Final control strain magnitude.")
+@click.option("--unload-at", type=float, multiple=True,
+              help="Control strain at which to unload to zero and reload (repeatable).")
+@click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default=None,
+              help="Write the stress-strain path to this CSV file ('-' for stdout).")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@_handle_errors
+def point(fc: float, h_c: float, path: str, formulation: str, steps: int, max_strain: float,
+          unload_at: tuple[float, ...], csv_path: str | None, as_json: bool) -> None:
+    """Drive one concrete material point along a strain path (no mesh)."""
+    from icewall.materials.parameters import derive_concrete_parameters
+    from icewall.materials.point import run_path
+
+    try:
+        params = derive_concrete_parameters(fc, h_c)
+        result = run_path(path, params, formulation, n_steps=steps, max_strain=max_strain,
+                          unload_at=unload_at)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc)) from None
+    if csv_path == "-":
+        result.to_csv(sys.stdout)
+    elif csv_path:
+        result.to_csv(csv_path)
+    summary = result.summary()
+    if as_json:
+        click.echo(json.dumps(summary, indent=2, default=float))
+    elif csv_path != "-":
+        for key, value in summary.items():
+            click.echo(f"{key:>28}: {value}")
+
+
+@main.command()
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Write to a file instead of standard output.")
 def schema(output: str | None) -> None:

@@ -89,7 +89,7 @@ def _envelope(strain: ArrayLike, E0: ArrayLike, peak_stress: ArrayLike, peak_str
     s_down = softening_stress(eps, peak_stress, eps_p, decay)
     rising = eps <= eps_p
     stress = np.where(rising, sec_up * np.minimum(eps, eps_p), s_down)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # clipped below
         sec_down = s_down / np.where(eps > 0.0, eps, 1.0)
     secant = np.where(rising, sec_up, sec_down)
     secant = np.clip(secant, SECANT_FLOOR * E0a, E0a)

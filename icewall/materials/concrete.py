@@ -1,0 +1,203 @@
+"""Hypoelastic orthotropic rotating-crack concrete (thesis §3.2, Fig. 3.12), batched over points.
+
+`update_concrete(strain, committed, params, formulation)` is pure: it returns the stress, the
+secant moduli and a trial state, and never touches `committed`. One call is one pass of
+Fig. 3.12 from the committed state to the given total strain:
+
+1-2. beta of the new principal strains; committed stress and the strain increment in those axes.
+3.   Trial stress sigma_lt = sigma_l + C_l(E, nu) d eps_l, with C_l rebuilt from the stored E, nu
+     in the new axes (errata §3, instead of rotating the old C_g).
+4.   eps_iu = sigma_lt,i / E_i with the secant E_i (errata 1.1 on eq. 3.8: step 4, not 3.8).
+5.   sigma_ic, eps_ic from the ultimate surfaces on the ray of the trial stress (errata 1.3).
+6.   Per direction: loading (|eps_iu| beyond its maximum) follows eqs. 3.9-3.11 and updates the
+     secant E_i, nu_i (3.19-3.20); unloading keeps E_i, nu_i (Fig. 3.13). The local shear stress
+     is reset to zero (§3.2.6), G12 from eq. 3.21.
+7-8. Secant C_l from the new E, nu, G12, back to global axes (errata 1.3).
+
+Secant relation: per direction sigma_i = E_i eps_iu (except below the secant floor); in global
+components sigma = C_g eps holds exactly only while nu and the ratios E_i/E_j stay fixed between the
+committed and the new state (e.g. the linear tension range); otherwise C_g is the thesis'
+iteration (secant) matrix. `concrete_tangent` gives the algorithmic tangent by differences.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from icewall.fem.kinematics import check_formulation
+from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.orthotropic import (
+    compression_poisson_ratio,
+    condense_plane_stress,
+    global_moduli,
+    global_stress,
+    local_normal_components,
+    orthotropic_normal_stiffness,
+    principal_strain_angle,
+    tension_poisson_ratio,
+)
+from icewall.materials.ultimate_surface import (
+    equivalent_uniaxial_peak_strains,
+    equivalent_uniaxial_strengths,
+)
+from icewall.materials.uniaxial import compression_envelope, tension_envelope
+
+LOADING_TOLERANCE = 1e-10
+"""Margin on max |eps_iu| (relative to the point's stress / E_i): a zero increment unloads and
+returns the same stress."""
+
+__all__ = ["ConcreteState", "concrete_tangent", "update_concrete"]
+
+
+def _point_column(value: Any, rows: np.ndarray | None) -> np.ndarray:
+    """A scalar or per-point (n,) parameter as a column broadcastable to (n, 3) (or its rows)."""
+    column = np.asarray(value, dtype=float).reshape(-1, 1)
+    return column if rows is None or column.shape[0] == 1 else column[rows]
+
+
+def _envelope(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.ndarray,
+              params: Any, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Envelope stress and secant magnitudes (n, 3) at |eps_iu| (eqs. 3.9-3.11).
+
+    The tension or compression curve is chosen by the sign of eps_iu, which the strengths share
+    (they are passed strain_sign). Eq. 3.11 / errata 1.1: both decay branches in magnitudes,
+    each from its own peak strain (in `uniaxial`). The secant is capped at E_i0 (errata §3).
+    """
+    magnitude = np.abs(eps_u)
+    tensile = eps_u > 0.0
+    peak_stress, peak_magnitude = np.abs(strength), np.abs(peak_strain)
+    k_t, k_c = _point_column(params.k_t, rows), _point_column(params.k_c, rows)
+    t_stress, t_secant = tension_envelope(magnitude, params.E0, peak_stress, peak_magnitude, k_t)
+    c_stress, c_secant = compression_envelope(magnitude, params.E0, peak_stress,
+                                              peak_magnitude, k_c)
+    return np.where(tensile, t_stress, c_stress), np.where(tensile, t_secant, c_secant)
+
+
+def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str
+                    ) -> tuple[np.ndarray, np.ndarray, ConcreteState]:
+    """Stress (n, 4), secant moduli (n, 4, 4) and trial state at total strain (n, 4).
+
+    plane_strain: eps_zz = 0 is imposed and sigma_zz tracked. plane_stress: sigma_zz = 0 is
+    condensed, the input eps_zz is ignored and the solved one stored in the trial state (moduli
+    have zero zz row/column). axisymmetric: zz is the hoop direction, taken from the input.
+    """
+    check_formulation(formulation)
+    strain = np.array(strain, dtype=float, copy=True).reshape(-1, 4)
+    nu0 = float(params.nu0)
+    plane_stress = formulation == "plane_stress"
+    if formulation == "plane_strain":
+        strain[:, 2] = 0.0
+    elif plane_stress:
+        strain[:, 2] = state.strain[:, 2]
+
+    # Steps 1-2: new axes; committed stress and strain increment referred to them (errata 1.3).
+    angle = principal_strain_angle(strain, state.angle)
+    strain_increment = local_normal_components(strain - state.strain, angle, 1.0)
+    committed_stress = local_normal_components(state.stress, angle, 2.0)
+    stiffness = orthotropic_normal_stiffness(state.secant_modulus, state.poisson_ratio)
+    if plane_stress:  # sigma_3t = 0 fixes the out-of-plane strain increment (errata §3)
+        strain_increment[:, 2] = -(committed_stress[:, 2]
+                                   + stiffness[:, 2, 0] * strain_increment[:, 0]
+                                   + stiffness[:, 2, 1] * strain_increment[:, 1]
+                                   ) / stiffness[:, 2, 2]
+        strain[:, 2] += strain_increment[:, 2]
+
+    # Step 3: trial stress; step 4: eps_iu = sigma_lt / E_i (secant; errata 1.1 on eq. 3.8).
+    trial = committed_stress + np.einsum("nij,nj->ni", stiffness, strain_increment)
+    if plane_stress:
+        trial[:, 2] = 0.0
+    eps_u = trial / state.secant_modulus
+
+    # Step 5: uniaxial parameters on the ray of the trial stress (errata 1.3, step 5).
+    strength = equivalent_uniaxial_strengths(trial, params, strain_sign=eps_u)
+    peak_strain = equivalent_uniaxial_peak_strains(strength, params)
+
+    # Step 6: loading vs unloading by max |eps_iu| per direction (errata §3, Fig. 3.13).
+    envelope_stress, envelope_secant = _envelope(eps_u, strength, peak_strain, params)
+    magnitude = np.abs(eps_u)
+    secant_line = state.secant_modulus * magnitude
+    # a direction that changes sign never unloads along a secant above its new envelope
+    # (checked against the uniaxial envelope, so that a zero increment stays an unloading)
+    sign_change = (eps_u > 0.0) != (state.uniaxial_strength > 0.0)
+    # round-off of the rotation is relative to the point's largest stress, not to sigma_i
+    slack = LOADING_TOLERANCE * (state.max_equivalent_uniaxial_strain + np.abs(
+        trial).max(axis=1, keepdims=True) / state.secant_modulus)
+    loading = magnitude > state.max_equivalent_uniaxial_strain + slack
+    rows = np.nonzero(sign_change.any(axis=1))[0]
+    if rows.size:
+        uniaxial_strength = np.where(eps_u[rows] > 0.0, params.ft, -params.fc)
+        uniaxial_stress, _ = _envelope(eps_u[rows], uniaxial_strength, np.where(
+            eps_u[rows] > 0.0, params.eps_t, -params.eps_c), params, rows)
+        loading[rows] |= sign_change[rows] & (secant_line[rows] > uniaxial_stress * (1 + 1e-9))
+    # on the same branch the secant never grows (damage is irreversible; the thesis is silent):
+    # where the surface now gives a larger sigma_ic, load along the current secant instead
+    heal = ~sign_change & (envelope_secant > state.secant_modulus)
+    secant_modulus = np.where(loading & ~heal, envelope_secant, state.secant_modulus)
+    # on the envelope sigma_i = sign(eps_iu) sigma_env = E_i eps_iu, except where the secant is
+    # floored far down a softening branch (uniaxial.SECANT_FLOOR): there the stress -> 0
+    local_stress = np.where(loading & ~heal, np.copysign(envelope_stress, eps_u), trial)
+
+    strain_ratio = magnitude / np.abs(np.where(loading, peak_strain, state.uniaxial_peak_strain))
+    nu_new = np.where(eps_u > 0.0, tension_poisson_ratio(strain_ratio, nu0),
+                      compression_poisson_ratio(strain_ratio, nu0))
+    poisson_ratio = np.where(loading, np.minimum(nu_new, params.nu_max), state.poisson_ratio)
+    if plane_stress:  # direction 3 carries no stress: it keeps its virgin properties
+        local_stress[:, 2] = 0.0
+    # Eq. 3.21: G12 = G120 * min(E_1/E_10, E_2/E_20) over the in-plane directions.
+    shear_modulus = secant_modulus[:, :2].min(axis=1) / (2.0 * (1.0 + nu0))
+
+    beyond_peak = loading & (magnitude > np.abs(peak_strain))
+    stress = global_stress(local_stress, angle)
+
+    # Steps 7-8: secant moduli in global axes.
+    new_stiffness = orthotropic_normal_stiffness(secant_modulus, poisson_ratio)
+    if plane_stress:
+        new_stiffness = condense_plane_stress(new_stiffness)
+    moduli = global_moduli(new_stiffness, shear_modulus, angle)
+
+    trial_state = ConcreteState(
+        strain=strain,
+        stress=stress,
+        angle=angle,
+        equivalent_uniaxial_strain=eps_u,
+        max_equivalent_uniaxial_strain=np.maximum(state.max_equivalent_uniaxial_strain,
+                                                  magnitude),
+        secant_modulus=secant_modulus,
+        poisson_ratio=poisson_ratio,
+        shear_modulus=shear_modulus,
+        uniaxial_strength=np.where(loading, strength, state.uniaxial_strength),
+        uniaxial_peak_strain=np.where(loading, peak_strain, state.uniaxial_peak_strain),
+        cracked=state.cracked | (beyond_peak & (eps_u > 0.0)),
+        crushed=state.crushed | (beyond_peak & (eps_u < 0.0)),
+    )
+    return stress, moduli, trial_state
+
+
+def concrete_tangent(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
+                     relative_step: float = 1e-7) -> np.ndarray:
+    """Algorithmic tangent d sigma / d eps (n, 4, 4) of `update_concrete` by forward differences.
+
+    Vectorised: one batched update of 4n (plane stress: 3n) perturbed points. The step is
+    relative_step times the strain size (at least 1e-10). Plane stress: zz row/column zero.
+    """
+    strain = np.asarray(strain, dtype=float).reshape(-1, 4)
+    n = strain.shape[0]
+    columns = [0, 1, 3] if formulation == "plane_stress" else [0, 1, 2, 3]
+    if formulation == "plane_strain":
+        columns = [0, 1, 3]
+    step = relative_step * np.maximum(np.abs(strain).max(axis=1), 1e-3)
+    base, _, _ = update_concrete(strain, state, params, formulation)
+    perturbed = np.repeat(strain[None], len(columns), axis=0)  # (k, n, 4)
+    for k, j in enumerate(columns):
+        perturbed[k, :, j] += step
+    repeated = state.take(np.tile(np.arange(n), len(columns)))
+    stressed, _, _ = update_concrete(perturbed.reshape(-1, 4), repeated, params, formulation)
+    difference = (stressed.reshape(len(columns), n, 4) - base[None]) / step[None, :, None]
+    tangent = np.zeros((n, 4, 4))
+    for k, j in enumerate(columns):
+        tangent[:, :, j] = difference[k]
+    if formulation == "plane_stress":
+        tangent[:, 2, :] = 0.0
+    return tangent

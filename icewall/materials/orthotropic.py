@@ -1,0 +1,131 @@
+"""Orthotropic kernels of the concrete model (thesis §3.2.2, §3.2.6, Fig. 3.12), batched.
+
+Local axes: 1, 2 in the plane at angle beta (axis 1 at beta from x), 3 = zz (out-of-plane or hoop).
+Strain/stress 4-vectors [xx, yy, zz, xy], engineering shear, tension positive.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+PHI_MIN = 1e-3
+"""Floor on the determinant phi of eq. 3.3d (errata §3: guard phi -> 0 as nu -> 0.5)."""
+ANGLE_TOLERANCE = 1e-9
+"""In-plane principal-strain radius, relative to the strain size, below which beta is kept."""
+
+
+def principal_strain_angle(strain: np.ndarray, previous_angle: np.ndarray) -> np.ndarray:
+    """Orthotropy angle beta (n,) of the in-plane principal strain axes (rotating crack, §3.2.2).
+
+    Of the two axis labellings (beta, beta + pi/2) the one nearest `previous_angle` (mod pi) is
+    kept, so directions 1 and 2 keep their damage as the axes rotate; the angle is stored
+    unwrapped. Where the in-plane strain is (nearly) isotropic the previous angle is kept.
+    """
+    half_difference = 0.5 * (strain[:, 0] - strain[:, 1])
+    half_shear = 0.5 * strain[:, 3]
+    radius = np.hypot(half_difference, half_shear)
+    size = np.abs(strain[:, :2]).max(axis=1) + np.abs(half_shear)
+    major = 0.5 * np.arctan2(half_shear, half_difference)  # direction of the major strain
+    # distance from the previous angle modulo pi/2 (both labellings), in [-pi/4, pi/4)
+    delta = np.mod(major - previous_angle + 0.25 * np.pi, 0.5 * np.pi) - 0.25 * np.pi
+    defined = radius > ANGLE_TOLERANCE * size
+    return np.where(defined, previous_angle + delta, previous_angle)
+
+
+def strain_rotation(angle: np.ndarray) -> np.ndarray:
+    """T_eps (n, 4, 4): local strain = T_eps @ global strain (engineering shear).
+
+    The stress rotation is T_sigma = T_eps^-T, so sigma_g = T_eps^T sigma_l and
+    C_g = T_eps^T C_l T_eps (Fig. 3.12 steps 2 and 8 as corrected in errata §1.3).
+    """
+    c, s = np.cos(angle), np.sin(angle)
+    cc, ss, cs = c * c, s * s, c * s
+    T = np.zeros(angle.shape + (4, 4))
+    T[:, 0, 0], T[:, 0, 1], T[:, 0, 3] = cc, ss, cs
+    T[:, 1, 0], T[:, 1, 1], T[:, 1, 3] = ss, cc, -cs
+    T[:, 2, 2] = 1.0
+    T[:, 3, 0], T[:, 3, 1], T[:, 3, 3] = -2.0 * cs, 2.0 * cs, cc - ss
+    return T
+
+
+def local_normal_components(vector: np.ndarray, angle: np.ndarray, shear_factor: float
+                            ) -> np.ndarray:
+    """Normal components (n, 3) of a global 4-vector in the local axes.
+
+    shear_factor = 1 for engineering strain (T_eps rows 1-3), 2 for stress (T_sigma rows 1-3).
+    """
+    c, s = np.cos(angle), np.sin(angle)
+    cc, ss, cs = c * c, s * s, shear_factor * c * s
+    xx, yy, zz, xy = vector[:, 0], vector[:, 1], vector[:, 2], vector[:, 3]
+    return np.stack([cc * xx + ss * yy + cs * xy, ss * xx + cc * yy - cs * xy, zz], axis=1)
+
+
+def global_stress(principal: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """sigma_g = T_eps^T [s1, s2, s3, 0] (n, 4): local shear stress reset to zero (§3.2.6)."""
+    c, s = np.cos(angle), np.sin(angle)
+    cc, ss, cs = c * c, s * s, c * s
+    s1, s2, s3 = principal[:, 0], principal[:, 1], principal[:, 2]
+    return np.stack([cc * s1 + ss * s2, ss * s1 + cc * s2, s3, cs * (s1 - s2)], axis=1)
+
+
+def orthotropic_normal_stiffness(modulus: np.ndarray, poisson: np.ndarray) -> np.ndarray:
+    """Normal block (n, 3, 3) of the local stiffness, eq. 3.2 with the 1/phi prefactor.
+
+    Eq. 3.2 / errata 1.1: the printed matrix must be divided by phi.
+    Eq. 3.3a-c: eta_ij^2 = nu_i nu_j. Eq. 3.3d / errata 1.1: phi = 1 - eta12^2 - eta23^2 -
+    eta31^2 - 2 eta12 eta23 eta31 (printed 2 eta31^3); floored at PHI_MIN (errata §3).
+    """
+    E1, E2, E3 = modulus[:, 0], modulus[:, 1], modulus[:, 2]
+    eta12 = np.sqrt(poisson[:, 0] * poisson[:, 1])
+    eta23 = np.sqrt(poisson[:, 1] * poisson[:, 2])
+    eta31 = np.sqrt(poisson[:, 2] * poisson[:, 0])
+    phi = 1.0 - eta12**2 - eta23**2 - eta31**2 - 2.0 * eta12 * eta23 * eta31
+    inverse_phi = 1.0 / np.maximum(phi, PHI_MIN)
+    C = np.empty(modulus.shape[:1] + (3, 3))
+    C[:, 0, 0] = E1 * (1.0 - eta23**2) * inverse_phi
+    C[:, 1, 1] = E2 * (1.0 - eta31**2) * inverse_phi
+    C[:, 2, 2] = E3 * (1.0 - eta12**2) * inverse_phi
+    C[:, 0, 1] = C[:, 1, 0] = np.sqrt(E1 * E2) * (eta31 * eta23 + eta12) * inverse_phi
+    C[:, 0, 2] = C[:, 2, 0] = np.sqrt(E1 * E3) * (eta12 * eta23 + eta31) * inverse_phi
+    C[:, 1, 2] = C[:, 2, 1] = np.sqrt(E2 * E3) * (eta12 * eta31 + eta23) * inverse_phi
+    return C
+
+
+def uniaxial_coupling_matrix(modulus: np.ndarray, poisson: np.ndarray) -> np.ndarray:
+    """B (n, 3, 3) of eq. 3.4, B_ij = C_ij / E_i, so that d eps_iu = sum_j B_ij d eps_j.
+
+    Eq. 3.4 row 3 / errata 1.1: row 3 is E3 B31, E3 B32, E3 B33 (B is not symmetric).
+    Eq. 3.7a / errata 1.1: d eps_iu = B_i1 d eps_1 + B_i2 d eps_2 + B_i3 d eps_3, without E_i.
+    """
+    return orthotropic_normal_stiffness(modulus, poisson) / modulus[:, :, None]
+
+
+def condense_plane_stress(normal_stiffness: np.ndarray) -> np.ndarray:
+    """Normal block with sigma_3 = 0 condensed out; row and column 3 set to zero (errata §3)."""
+    C = normal_stiffness
+    coupling = C[:, :, 2] / C[:, 2:3, 2]  # (n, 3): C_a3 / C_33
+    condensed = C - coupling[:, :, None] * C[:, None, 2, :]
+    condensed[:, 2, :] = 0.0
+    condensed[:, :, 2] = 0.0
+    return condensed
+
+
+def global_moduli(normal_stiffness: np.ndarray, shear_modulus: np.ndarray, angle: np.ndarray
+                  ) -> np.ndarray:
+    """C_g = T_eps^T C_l T_eps (n, 4, 4) (Fig. 3.12 step 8, errata §1.3)."""
+    local = np.zeros(angle.shape + (4, 4))
+    local[:, :3, :3] = normal_stiffness
+    local[:, 3, 3] = shear_modulus
+    T = strain_rotation(angle)
+    return np.einsum("nki,nkl,nlj->nij", T, local, T, optimize=True)
+
+
+def compression_poisson_ratio(strain_ratio: np.ndarray, nu0: float) -> np.ndarray:
+    """Eq. 3.19: nu = nu0 (1 + 1.3763 a - 5.36 a^2 + 8.586 a^3), a = |eps_iu| / |eps_ic|."""
+    a = np.minimum(strain_ratio, 10.0)  # nu is capped below 0.5 long before (3.19 at a=1: 2.6 nu0)
+    return nu0 * (1.0 + a * (1.3763 + a * (-5.36 + a * 8.586)))
+
+
+def tension_poisson_ratio(strain_ratio: np.ndarray, nu0: float) -> np.ndarray:
+    """Eq. 3.20: nu0 up to a = 0.5, then linear to zero at a = 1, zero beyond."""
+    return nu0 * np.clip(2.0 * (1.0 - strain_ratio), 0.0, 1.0)
