@@ -163,6 +163,19 @@ class Interface:
                              maximum=2.0)
     reset_slip_each_step: bool = option(True, doc="slipped pairs start every step fixed "
                                         "(thesis 3.3.4)")
+    fixed_points_per_core: int = option(2, doc="permanently fixed pairs per core on its top "
+                                        "face (thesis 4.3.2; two stop rotation as well as "
+                                        "sliding when all other pairs open)", minimum=0,
+                                        maximum=10)
+    friction_update: str = option("implicit", doc="implicit: the Coulomb condition of a "
+                                  "slipping pair is a row of the augmented system; lagged: the "
+                                  "thesis' T = sign(lam_T) mu |lam_N| - lam_T from the previous "
+                                  "iterate (eq. 3.41, errata)", choices=("implicit", "lagged"))
+    slip_reversal: str = option("stick", doc="a slipping pair whose slip in the step opposes "
+                                "its friction force: stick (back to fixed where it is), reverse "
+                                "(flip the friction force) or none (the thesis: 3.41 keeps the "
+                                "sign for the whole step, which can dissipate negative work)",
+                                choices=("stick", "reverse", "none"))
 
 
 @dataclass(frozen=True, kw_only=True)

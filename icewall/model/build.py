@@ -64,9 +64,11 @@ def initial_elastic_constants(deck: Deck, cell_material: np.ndarray,
 
 
 def build_model(deck: Deck, mesh: Mesh, materials_of_region: dict[str, str]) -> Model:
-    """Build the model; gap-model interface pairs are tied (bonded) in the linear analysis."""
+    """Build the model. Interface pairs get gap elements in the nonlinear analysis; the linear
+    analysis ties them (perfect bond)."""
     analysis = deck.analysis
-    dof_map = DofMap(mesh.n_nodes, ties=mesh.interface_pairs)
+    ties = mesh.interface_pairs if analysis.solver == "linear" else None
+    dof_map = DofMap(mesh.n_nodes, ties=ties)
     kin = element_kinematics(mesh.points, mesh.cells, mesh.cell_type, gauss_rule(analysis.gauss),
                              analysis.formulation, deck.geometry.width, dof_map)
     cell_material = cell_materials(deck, mesh, materials_of_region)

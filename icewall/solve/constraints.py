@@ -78,7 +78,8 @@ class SupportConstraints:
         return np.concatenate([self.restrict(reference), np.zeros(self.n_multipliers)])
 
     def unbalance_rhs(self, unbalance: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """RHS of eq. 3.45: the unbalance plus the constraint rows for the current states."""
+        """RHS of eq. 3.45 from F_ext - F_int (without constraint forces) and the constraint
+        rows of the current states."""
         return self.restrict(unbalance)
 
     def split(self, solution: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -102,7 +102,8 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
         forensics["gauss_flag_changes"].append(int(np.count_nonzero(flags != flags_before)))
         flags_before = flags
         external = P * R + c.restrict(F_pre)
-        unbalance = c.restrict(external - ev.internal_force - c.constraint_force())
+        structural = c.restrict(external - ev.internal_force)  # F_ext - F_int, no gap forces
+        unbalance = structural - c.restrict(c.constraint_force())
         # eq. 4.5; the reference is the largest load reached, so that the norm stays
         # meaningful when the load falls towards zero far down the descending branch
         scale = max(_norm(external), start.load_scale, 1e-30)
@@ -118,7 +119,7 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
                              iteration - 1, disp_norm, load_norm, ev, u, forensics)
         if factor is None or settings.stiffness_update == "every_iteration" or flips:
             factor = c.factorize(s.stiffness(ev))
-        rhs_unbalance = c.unbalance_rhs(unbalance, u)
+        rhs_unbalance = c.unbalance_rhs(structural, u)
         if target_deflection is None:
             du, dm = c.split(factor.solve(rhs_unbalance))
             dP = 0.0

@@ -1,0 +1,198 @@
+"""Augmented (saddle-point) equations of the gap elements for one iteration (eq. 3.35).
+
+Unknowns x = [du (n_eq); dlam (2 n_pairs)] with dlam in constraint-row order [N_0, T_0, ...].
+Tables 3.1/3.3 in TOTAL form, per pair state (see icewall.interface.gap for the signs):
+  FIXED: C_N du = 0 - Delta_N,  C_T du = stick_T - Delta_T          (rows active)
+  SLIP:  C_N du = 0 - Delta_N;  dlam_T = T = sign(lam_T) mu |lam_N| - lam_T  (prescribed)
+  FREE:  dlam_N = N = -lam_N,   dlam_T = T = -lam_T                   (prescribed, eq. 3.43)
+Prescribed multipliers are moved to the displacement right-hand side (-C_p^T dlam_p, exactly
+Table 3.1's slip/free "load" columns) and their rows become identity rows, so
+    A = [[K, C_a^T], [C_a, 0]]  (+)  I_prescribed
+stays symmetric (indefinite). Supported equations become identity rows/columns with zero
+increments. Displacement control (errata §3): reference solve [R*; 0] (R* is zero in the
+multiplier rows) and unbalanced solve [r_u - C^T lam - C_p^T dlam_p; targets] (gap "loads" go
+here, never scaled by the load factor), both on one factorisation.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from icewall.errors import ConvergenceError
+from icewall.interface.gap import FIXED, FREE, SLIP, GapState, relative_displacement, slip_force
+
+# Same ordering options as icewall.solve.linear; threshold pivoting picks an off-diagonal
+# pivot for the zero diagonal of the multiplier block.
+SPLU_OPTIONS = {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 1e-3,
+                "options": {"SymmetricMode": True}}
+# |U_jj| below this fraction of the largest entry of column j marks a singular system
+# (a floating core gives ~1e-16).
+PIVOT_RTOL = 1e-12
+# Relative residual |A x - b| / (|A| |x| + |b|) after one refinement step above which the
+# solution is rejected as singular.
+RESIDUAL_RTOL = 1e-8
+
+SINGULAR_HINT = ("a concrete core (or steel part) may have no active interface pair (all FREE) "
+                 "and float: add fixed points (choose_fixed_points) or check the supports")
+
+
+def active_rows(state: GapState) -> np.ndarray:
+    """(2n,) bool: constraint rows enforced as C_r du = target_r (the others are prescribed)."""
+    active_N = state.state != FREE
+    active_T = state.state == FIXED
+    return np.column_stack([active_N, active_T]).ravel()
+
+
+def prescribed_increments(state: GapState, mu: float) -> np.ndarray:
+    """Prescribed dlam (2n,) of the inactive rows (Table 3.3, errata), zero on active rows.
+
+    SLIP uses the CURRENT accumulated lam_N (the start of this iteration): the normal row is
+    solved in the same system, so lam_T lags lam_N by one iteration and meets the Coulomb
+    limit at convergence (when dlam_N -> 0). Printed 3.41 (lam_T - mu lam_N) would add the
+    excess instead of removing it.
+    """
+    d_N = np.where(state.state == FREE, -state.lam_N, 0.0)  # eq. 3.43a
+    d_T = np.zeros(state.n_pairs)
+    slip, free = state.state == SLIP, state.state == FREE
+    d_T[slip] = slip_force(state.lam_N[slip], state.lam_T[slip], mu) - state.lam_T[slip]
+    d_T[free] = -state.lam_T[free]  # eq. 3.43b
+    return np.column_stack([d_N, d_T]).ravel()
+
+
+def constraint_targets(C: sp.spmatrix, u: np.ndarray, state: GapState) -> np.ndarray:
+    """Right-hand sides (2n,) target - C u of the rows (normal target 0, tangential stick_T)."""
+    gap_N, gap_T = relative_displacement(C, u)
+    return np.column_stack([-gap_N, state.stick_T - gap_T]).ravel()
+
+
+def _fixed_mask(n_eq: int, fixed_equations: np.ndarray | None) -> np.ndarray:
+    mask = np.zeros(n_eq, dtype=bool)
+    if fixed_equations is not None:
+        mask[np.asarray(fixed_equations, dtype=int)] = True
+    return mask
+
+
+def implicit_slip_rows(state: GapState) -> np.ndarray:
+    """(2n,) bool: the tangential rows of SLIP pairs (unknown multipliers when implicit)."""
+    return np.column_stack([np.zeros(state.n_pairs, bool), state.state == SLIP]).ravel()
+
+
+def augmented_matrix(K: sp.spmatrix, C: sp.spmatrix, state: GapState,
+                     fixed_equations: np.ndarray | None = None, mu: float = 0.0,
+                     implicit_slip: bool = False) -> sp.csc_matrix:
+    """A (n_eq + 2n square) for the current pair states; supports as identity rows.
+
+    Symmetric with the thesis' lagged friction. With `implicit_slip` the tangential row of a
+    SLIP pair is the Coulomb condition itself, dlam_T + s mu dlam_N = -(lam_T + s mu lam_N)
+    with s = sign(lam_T) (so lam_T = s mu |lam_N| with lam_N < 0 holds at once instead of
+    lagging one iteration behind lam_N); A is then unsymmetric.
+    """
+    n_eq = K.shape[0]
+    fixed = _fixed_mask(n_eq, fixed_equations)
+    free_eq = sp.diags((~fixed).astype(float))
+    K_r = free_eq @ sp.csr_matrix(K) @ free_eq + sp.diags(fixed.astype(float))
+    active = active_rows(state)
+    C_a = sp.diags(active.astype(float)) @ sp.csr_matrix(C) @ free_eq
+    if not implicit_slip:
+        A = sp.bmat([[K_r, C_a.T], [C_a, sp.diags((~active).astype(float))]], format="csc")
+        A.eliminate_zeros()
+        return A
+    slip_T = implicit_slip_rows(state)
+    C_u = sp.diags((active | slip_T).astype(float)) @ sp.csr_matrix(C) @ free_eq
+    n = state.n_pairs
+    slip = np.flatnonzero(state.state == SLIP)
+    coupling = sp.csr_matrix((np.sign(state.lam_T[slip]) * mu, (2 * slip + 1, 2 * slip)),
+                             shape=(2 * n, 2 * n))
+    D = sp.diags((~active).astype(float)) + coupling
+    A = sp.bmat([[K_r, C_u.T], [C_a, D]], format="csc")
+    A.eliminate_zeros()
+    return A
+
+
+def augmented_rhs(r_u: np.ndarray, u: np.ndarray, C: sp.spmatrix, state: GapState, mu: float,
+                  fixed_equations: np.ndarray | None = None,
+                  implicit_slip: bool = False) -> np.ndarray:
+    """Unbalanced right-hand side (n_eq + 2n,) incl. the gap "loads" (the displacement-control
+    II vector). r_u = F_ext - F_int of the structure WITHOUT the gap forces (C^T lam is
+    subtracted here). Its norm, with r_u the full residual, measures convergence: it is zero
+    when equilibrium, the FIXED/SLIP targets and the prescribed multipliers all hold.
+    """
+    C = sp.csr_matrix(C)
+    active = active_rows(state)
+    d_lam_p = prescribed_increments(state, mu)
+    if implicit_slip:
+        slip_T = implicit_slip_rows(state)
+        d_lam_p[slip_T] = 0.0  # unknown, not prescribed
+    top = np.asarray(r_u, dtype=float) - C.T @ (state.lam + d_lam_p)  # Table 3.1 "load" column
+    top[_fixed_mask(C.shape[1], fixed_equations)] = 0.0
+    bottom = np.where(active, constraint_targets(C, u, state), d_lam_p)
+    if implicit_slip:
+        slip = state.state == SLIP
+        coulomb = -(state.lam_T + np.sign(state.lam_T) * mu * state.lam_N)
+        bottom[slip_T] = coulomb[slip]
+    return np.concatenate([top, bottom])
+
+
+def reference_rhs(R: np.ndarray, n_pairs: int, fixed_equations: np.ndarray | None = None
+                  ) -> np.ndarray:
+    """Reference-load right-hand side [R*; 0] (errata §3: R* is zero in the multiplier rows)."""
+    top = np.array(R, dtype=float)
+    top[_fixed_mask(top.size, fixed_equations)] = 0.0
+    return np.concatenate([top, np.zeros(2 * n_pairs)])
+
+
+def split_solution(x: np.ndarray, n_eq: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(du (n_eq, ...), dlam_N (n, ...), dlam_T (n, ...)) of a solution (n_eq + 2n, ...)."""
+    x = np.asarray(x)
+    return x[:n_eq], x[n_eq::2], x[n_eq + 1::2]
+
+
+def interface_forces(C: sp.spmatrix, state: GapState) -> np.ndarray:
+    """C^T lam (n_eq,): gap forces on the nodes, on the internal-force side of the residual."""
+    return sp.csr_matrix(C).T @ state.lam
+
+
+class AugmentedFactor:
+    """LU factors of an augmented matrix; `solve` takes one (m,) or several (m, k) RHS."""
+
+    def __init__(self, A: sp.csc_matrix, lu: spla.SuperLU) -> None:
+        self.A, self.lu = A, lu
+        self.norm_A = float(abs(A).max())
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        b = np.asarray(rhs, dtype=float)
+        x = self.lu.solve(b)
+        x = x + self.lu.solve(b - self.A @ x)  # one step of iterative refinement
+        residual = np.abs(b - self.A @ x).max(axis=0)
+        scale = self.norm_A * np.abs(x).max(axis=0) + np.abs(b).max(axis=0)
+        if not np.all(np.isfinite(x)) or np.any(residual > RESIDUAL_RTOL * scale):
+            raise ConvergenceError("augmented interface system is singular: inaccurate or "
+                                   f"non-finite solution; {SINGULAR_HINT}",
+                                   reason="singular system")
+        return x
+
+
+def factorize(A: sp.spmatrix) -> AugmentedFactor:
+    """splu of the augmented matrix; ConvergenceError(reason="singular system") when singular."""
+    A = sp.csc_matrix(A)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", spla.MatrixRankWarning)
+        try:
+            lu = spla.splu(A, **SPLU_OPTIONS)
+        except (RuntimeError, spla.MatrixRankWarning) as exc:
+            raise ConvergenceError(f"augmented interface system is singular ({exc}); "
+                                   f"{SINGULAR_HINT}", reason="singular system") from exc
+    column = np.argsort(lu.perm_c)  # column j of L U is column perm_c^-1[j] of A
+    column_max = np.asarray(abs(A).max(axis=0).todense()).ravel()
+    small = np.abs(lu.U.diagonal()) <= PIVOT_RTOL * column_max[column]
+    if np.any(small):
+        where = np.sort(column[small])[:10].tolist()
+        raise ConvergenceError(f"augmented interface system is singular ({small.sum()} "
+                               f"near-zero pivot(s) near unknown(s) {where}; displacement "
+                               f"equations come first, node = eq // 2 without ties); "
+                               f"{SINGULAR_HINT}", reason="singular system")
+    return AugmentedFactor(A, lu)

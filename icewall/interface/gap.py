@@ -1,0 +1,233 @@
+"""Node-to-node steel-concrete gap elements (thesis §3.3, Katona 1984), vectorised over pairs.
+
+Sign conventions (thesis eq. 3.39 and Fig. 3.14, errata §1.2):
+  pair p = (node 1 = steel, node 2 = concrete); n = (C, S) unit normal from the steel into the
+  concrete, t = (-S, C). Relative displacement d = u2 - u1, normal gap Delta_N = n.d (> 0
+  opening), tangential Delta_T = t.d. Constraint rows on (u1, v1, u2, v2), eq. 3.39:
+      C_N = [-C, -S, C, S] (row 2p),  C_T = [S, -C, -S, C] (row 2p + 1).
+  Augmented equations (3.35): K du + C^T dlam = dQ, C du = da. The gap force on the nodes is
+  -C^T lam (C^T lam belongs with the internal forces), so lam_N < 0 is contact (compression)
+  and lam_N > 0 is tension, which frees the pair. lam_T > 0 resists a positive slip Delta_T.
+
+States: FIXED (both rows constrained, total targets Delta_N = 0, Delta_T = stick_T), SLIP
+(normal row constrained, lam_T prescribed at the Coulomb limit), FREE (lam_N = lam_T = 0).
+Multipliers and gaps are accumulated (total) values; `icewall.interface.augmented` builds the
+iteration matrix and right-hand sides from a GapState. A SLIP pair keeps sign(lam_T) (errata
+3.41) unless its slip in the step opposes lam_T (update_states(reverse_slip=True), not thesis).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from icewall.mesh.mesh import CONCRETE, Mesh
+
+FIXED, SLIP, FREE = 0, 1, 2
+STATE_NAMES = ("fixed", "slip", "free")
+
+# Tolerances of the state checks (Table 3.2). Forces are compared with the pair-force scale
+# max_p max(|lam_N|, |lam_T|) (or `force_scale`), gaps with max(GAP_ATOL, GAP_RTOL max|Delta_N|):
+#  - a FIXED/SLIP pair frees only if lam_N > FORCE_RTOL * scale (round-off tension of an unloaded
+#    pair must not free it and chatter);
+#  - FIXED -> SLIP needs |lam_T| >= mu |lam_N| - FORCE_RTOL * scale and |lam_T| > FORCE_RTOL *
+#    scale (the errata's ">=" boundary, round-off safe, and no "slip" of an unloaded pair);
+#  - FREE -> FIXED needs Delta_N < -gap_tol (real penetration, not round-off of a closed gap).
+FORCE_RTOL = 1e-9
+GAP_RTOL = 1e-9
+GAP_ATOL = 1e-9  # mm; displacements of interest are >= 1e-4 mm, round-off ~ 1e-15 mm
+
+TRANSITIONS = ("fixed->slip", "fixed->free", "slip->free", "free->fixed", "slip reversed")
+
+
+@dataclass(frozen=True)
+class GapState:
+    """Interface state of all pairs: states, accumulated multipliers and separations."""
+
+    state: np.ndarray  # (n,) int8 FIXED | SLIP | FREE
+    lam_N: np.ndarray  # (n,) accumulated normal multiplier (N), < 0 compression
+    lam_T: np.ndarray  # (n,) accumulated tangential multiplier (N)
+    gap_N: np.ndarray  # (n,) accumulated normal separation Delta_N (mm), > 0 open
+    gap_T: np.ndarray  # (n,) accumulated tangential separation Delta_T (mm)
+    stick_T: np.ndarray  # (n,) Delta_T at which a FIXED pair is held (total target of its C_T row)
+    permanent: np.ndarray  # (n,) bool, "fixed points" (§4.3.2): always FIXED
+    # (n,) Delta_T where the current slip began: the start of the load step (new_step), or the
+    # iterate at which the pair last started to slip
+    step_T: np.ndarray | None = None
+    transitions: dict[str, int] = field(default_factory=dict)  # of the last update/new_step
+
+    @classmethod
+    def initial(cls, n_pairs: int, permanent: np.ndarray | None = None) -> GapState:
+        """All pairs FIXED (perfect bond of the coincident nodes), zero forces and gaps."""
+        zeros = np.zeros(n_pairs)
+        perm = np.zeros(n_pairs, bool) if permanent is None else np.asarray(permanent, bool)
+        if perm.shape != (n_pairs,):
+            raise ValueError(f"permanent must be ({n_pairs},) bool, got shape {perm.shape}")
+        return cls(state=np.full(n_pairs, FIXED, np.int8), lam_N=zeros, lam_T=zeros.copy(),
+                   gap_N=zeros.copy(), gap_T=zeros.copy(), stick_T=zeros.copy(), permanent=perm,
+                   step_T=zeros.copy())
+
+    @property
+    def n_pairs(self) -> int:
+        return int(self.state.size)
+
+    @property
+    def lam(self) -> np.ndarray:
+        """Multipliers (2n,) in constraint-row order [N_0, T_0, N_1, T_1, ...]."""
+        return np.column_stack([self.lam_N, self.lam_T]).ravel()
+
+    @property
+    def n_flips(self) -> int:
+        return int(sum(self.transitions.values()))
+
+
+def constraint_matrix(pairs: np.ndarray, normals: np.ndarray, node_equations: np.ndarray,
+                      n_eq: int) -> sp.csr_matrix:
+    """C (2 n_pairs, n_eq) of eq. 3.39: row 2p = C_N, row 2p+1 = C_T of pair p. Build once."""
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    c, s = np.asarray(normals, dtype=float).reshape(-1, 2).T
+    n = pairs.shape[0]
+    eqs = np.asarray(node_equations)[pairs].reshape(n, 4)  # (u1, v1, u2, v2)
+    # eq. 3.39 (errata §1.2: correct as printed; Table 3.1's U1/lam_T entry is +S, = C_T[0])
+    values = np.stack([np.stack([-c, -s, c, s], 1), np.stack([s, -c, -s, c], 1)], 1)  # (n,2,4)
+    rows = np.broadcast_to(2 * np.arange(n)[:, None, None] + np.arange(2)[None, :, None],
+                           (n, 2, 4))
+    cols = np.broadcast_to(eqs[:, None, :], (n, 2, 4))
+    return sp.csr_matrix((values.ravel(), (rows.ravel(), cols.ravel())), shape=(2 * n, n_eq))
+
+
+def relative_displacement(C: sp.spmatrix, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(Delta_N, Delta_T) (n_pairs,) of the equation displacement vector u: C u by rows."""
+    d = C @ np.asarray(u, dtype=float)
+    return d[0::2].copy(), d[1::2].copy()
+
+
+def slip_force(lam_N: np.ndarray, lam_T: np.ndarray, mu: float) -> np.ndarray:
+    """Coulomb limit with the direction of lam_T kept: sign(lam_T) mu |lam_N| (errata 3.41)."""
+    return np.sign(lam_T) * mu * np.abs(lam_N)
+
+
+def update_states(state: GapState, lam_N: np.ndarray, lam_T: np.ndarray, gap_N: np.ndarray,
+                  gap_T: np.ndarray, mu: float, force_scale: float | None = None,
+                  reverse_slip: bool | str = "stick") -> tuple[GapState, int]:
+    """Table 3.2 (corrected, errata §1.2) applied to the updated multipliers and gaps.
+
+    FIXED -> FREE if lam_N > 0; FIXED -> SLIP if lam_N <= 0 and |lam_T| >= mu |lam_N| (the
+    printed "lam_T > mu lam_N" lost its absolute values); SLIP -> FREE if lam_N > 0 (no SLIP ->
+    FIXED within a step, §3.3.4); FREE -> FIXED if Delta_N < 0, holding stick_T = Delta_T.
+    Permanent pairs stay FIXED. Returns (new state with the new lam/gaps, number of changes).
+
+    reverse_slip (not in the thesis): a SLIP pair whose slip in this step, Delta_T - step_T,
+    opposes its lam_T (negative dissipation, e.g. a sign picked up from a transient
+    iterate, which 3.41 would otherwise lock in for the whole step) gets lam_T negated, so the
+    next prescribed return uses the friction direction that opposes the slip.
+    reverse_slip="stick" (not in the thesis either) returns such a pair to FIXED at its current
+    Delta_T instead: its slip has stopped or turned, so it sticks until its shear again
+    reaches the Coulomb limit. False keeps the thesis rule (no SLIP -> FIXED within a step).
+    """
+    lam_N, lam_T = np.asarray(lam_N, float), np.asarray(lam_T, float)
+    gap_N, gap_T = np.asarray(gap_N, float), np.asarray(gap_T, float)
+    if force_scale is None:
+        force_scale = float(max(np.abs(lam_N).max(initial=0.0), np.abs(lam_T).max(initial=0.0)))
+    f_tol = FORCE_RTOL * force_scale
+    step_T = state.gap_T if state.step_T is None else state.step_T
+    g_tol = max(GAP_ATOL, GAP_RTOL * float(np.abs(gap_N).max(initial=0.0)))
+    old = state.state
+    tension = lam_N > f_tol
+    at_limit = (np.abs(lam_T) >= mu * np.abs(lam_N) - f_tol) & (np.abs(lam_T) > f_tol)
+    movable = ~state.permanent
+    changes = {
+        "fixed->free": (old == FIXED) & tension & movable,
+        "fixed->slip": (old == FIXED) & ~tension & at_limit & movable,
+        "slip->free": (old == SLIP) & tension & movable,
+        "free->fixed": (old == FREE) & (gap_N < -g_tol),
+        "slip reversed": (old == SLIP) & ~tension & (lam_T * (gap_T - step_T) < 0)
+        & (np.abs(gap_T - step_T) > g_tol) & bool(reverse_slip),
+    }
+    sticks = changes["slip reversed"] if reverse_slip == "stick" else np.zeros_like(old, bool)
+    if reverse_slip == "stick":
+        changes["slip->fixed (reversal)"] = changes.pop("slip reversed")
+    else:
+        lam_T = np.where(changes["slip reversed"], -lam_T, lam_T)
+    new = old.copy()
+    new[changes["fixed->free"] | changes["slip->free"]] = FREE
+    new[changes["fixed->slip"]] = SLIP
+    new[changes["free->fixed"] | sticks | state.permanent] = FIXED
+    # Table 3.3: db = 0, the pair is held where it is
+    stick_T = np.where(changes["free->fixed"] | sticks, gap_T, state.stick_T)
+    if reverse_slip == "stick":  # judge the slip direction from where the pair began to slip
+        step_T = np.where(changes["fixed->slip"], gap_T, step_T)
+    counts = {k: int(np.count_nonzero(v)) for k, v in changes.items()}
+    new_state = replace(state, state=new, lam_N=lam_N.copy(), lam_T=lam_T.copy(),
+                        gap_N=gap_N.copy(), gap_T=gap_T.copy(), stick_T=stick_T,
+                        step_T=step_T, transitions=counts)
+    return new_state, sum(counts.values())
+
+
+def new_step(state: GapState, reset_slip: bool = True) -> GapState:
+    """Start of a load step: slipped pairs reset to FIXED at their current Delta_T (§3.3.4).
+
+    The reset makes the response path dependent; it is counted in transitions["slip->fixed
+    (new step)"] so the solver can report it. reset_slip=False keeps the slip states.
+    """
+    reset = (state.state == SLIP) & reset_slip
+    new = np.where(reset | state.permanent, FIXED, state.state).astype(np.int8)
+    stick_T = np.where(reset, state.gap_T, state.stick_T)
+    return replace(state, state=new, stick_T=stick_T, step_T=state.gap_T.copy(),
+                   transitions={"slip->fixed (new step)": int(np.count_nonzero(reset))})
+
+
+def count_states(state: GapState) -> dict[str, int]:
+    """Number of pairs in each state: {"fixed": .., "slip": .., "free": ..}."""
+    counts = np.bincount(state.state, minlength=3)
+    return {name: int(counts[k]) for k, name in enumerate(STATE_NAMES)}
+
+
+def friction_work_increment(state_old: GapState, state_new: GapState) -> float:
+    """Energy (N mm) dissipated by slip between two converged states (e.g. one load step).
+
+    Trapezoidal estimate sum 0.5 (|lam_T_old| + |lam_T_new|) |Delta_T_new - Delta_T_old| over
+    the pairs that are SLIP in `state_new` (stuck pairs do not move, free pairs carry no force).
+    """
+    slipping = state_new.state == SLIP
+    mean_force = 0.5 * (np.abs(state_old.lam_T) + np.abs(state_new.lam_T))
+    return float(np.sum((mean_force * np.abs(state_new.gap_T - state_old.gap_T))[slipping]))
+
+
+def choose_fixed_points(mesh: Mesh, per_core: int = 2, tol: float = 1e-6) -> np.ndarray:
+    """Permanent pairs (n_pairs,) bool: per concrete region (core), `per_core` top-face pairs.
+
+    Reading of §4.3.2 (Fig. 4.15, which showed them, is lost): in each core the pairs on its
+    TOP interface (normal n = (0, -1), under the loaded top plate; corner pairs excluded)
+    nearest the core's mid-length x (for a half-model core cut by the "symmetry" node set,
+    the symmetry line, where the full core's mid-length lies). One pair only stops the core
+    translating; it can still rotate about that pair when all others are FREE, so the default
+    takes the two nearest (adjacent) pairs. A core without a top face falls back to its
+    non-corner pairs.
+    """
+    pairs, normals = mesh.interface_pairs, mesh.interface_normals
+    chosen = np.zeros(len(pairs), dtype=bool)
+    if len(pairs) == 0:
+        return chosen
+    node_region = np.full(mesh.n_nodes, -1)
+    concrete = mesh.cells_of_kind(CONCRETE)
+    node_region[mesh.cells[concrete]] = mesh.cell_region[concrete][:, None]
+    pair_region = node_region[pairs[:, 1]]
+    x, y = mesh.points[pairs[:, 1]].T
+    top_face = (np.abs(normals[:, 0]) < tol) & (normals[:, 1] < 0) & ~mesh.interface_corner
+    for tag in np.unique(pair_region[pair_region >= 0]):  # loop over cores, not pairs
+        core_nodes = np.flatnonzero(node_region == tag)
+        on_symmetry = np.intersect1d(core_nodes, mesh.node_sets.get("symmetry", []))
+        x_core = mesh.points[on_symmetry if on_symmetry.size else core_nodes, 0]
+        x_mid = 0.5 * (x_core.min() + x_core.max())
+        in_core = pair_region == tag
+        candidates = np.flatnonzero(in_core & top_face)
+        if candidates.size:
+            candidates = candidates[y[candidates] >= y[candidates].max() - tol]
+        else:
+            candidates = np.flatnonzero(in_core & ~mesh.interface_corner)
+        order = np.lexsort((x[candidates], np.abs(x[candidates] - x_mid)))
+        chosen[candidates[order[:per_core]]] = True
+    return chosen

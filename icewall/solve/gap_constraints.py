@@ -1,0 +1,121 @@
+"""Supports plus the steel-concrete gap elements (thesis 3.3) as the solver's constraint set.
+
+Owns the pair states: trial states within an increment, committed states between them; the
+multipliers are unknowns of the augmented system (eq. 3.35) solved with a sparse LU.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from icewall.interface.augmented import (
+    active_rows,
+    augmented_matrix,
+    augmented_rhs,
+    factorize,
+    interface_forces,
+    reference_rhs,
+    split_solution,
+)
+from icewall.interface.gap import (
+    GapState,
+    choose_fixed_points,
+    constraint_matrix,
+    count_states,
+    friction_work_increment,
+    new_step,
+    relative_displacement,
+    update_states,
+)
+from icewall.model.build import Model
+
+
+class GapConstraints:
+    """u[fixed] = 0 and one gap element per interface node pair."""
+
+    def __init__(self, model: Model) -> None:
+        mesh, interface = model.mesh, model.deck.materials.interface
+        self.n_equations = model.dof_map.n_equations
+        self.fixed = np.asarray(model.fixed, dtype=int)
+        self.C = constraint_matrix(mesh.interface_pairs, mesh.interface_normals,
+                                   model.dof_map.node_equations, self.n_equations)
+        self.n_pairs = len(mesh.interface_pairs)
+        self.n_multipliers = 2 * self.n_pairs
+        self.mu = interface.friction
+        self.reset_slip = interface.reset_slip_each_step
+        self.reverse_slip = {"stick": "stick", "reverse": True, "none": False}[
+            interface.slip_reversal]
+        self.implicit_slip = interface.friction_update == "implicit"
+        permanent = (choose_fixed_points(mesh, per_core=interface.fixed_points_per_core)
+                     if interface.fixed_points_per_core else None)
+        # Constraint rows acting only on supported equations (e.g. the tangential row of a pair
+        # on the symmetry line, where both nodes have u_x = 0) are redundant: their multiplier
+        # stays zero (an identity row while the row is active).
+        free = np.ones(self.n_equations, dtype=bool)
+        free[self.fixed] = False
+        on_free = abs(self.C[:, np.flatnonzero(free)]).sum(axis=1)
+        self.redundant = np.asarray(on_free).ravel() == 0.0
+        self.committed = GapState.initial(self.n_pairs, permanent=permanent)
+        self.state = self.committed
+        self._friction_work = 0.0
+
+    def begin_step(self) -> None:
+        self.state = new_step(self.committed, reset_slip=self.reset_slip)
+
+    def commit(self) -> None:
+        self._friction_work = friction_work_increment(self.committed, self.state)
+        self.committed = self.state
+
+    def rollback(self) -> None:
+        self.state = self.committed
+
+    def constraint_force(self) -> np.ndarray:
+        return interface_forces(self.C, self.state)
+
+    def restrict(self, vector: np.ndarray) -> np.ndarray:
+        out = np.array(vector, dtype=float)
+        out[self.fixed] = 0.0
+        return out
+
+    def _redundant_active(self) -> np.ndarray:
+        return self.redundant & active_rows(self.state)
+
+    def factorize(self, K: sp.spmatrix):
+        A = augmented_matrix(K, self.C, self.state, self.fixed, self.mu, self.implicit_slip)
+        pad = np.concatenate([np.zeros(self.n_equations), self._redundant_active()])
+        return factorize(A + sp.diags(pad.astype(float)))
+
+    def reference_rhs(self, reference: np.ndarray) -> np.ndarray:
+        return reference_rhs(reference, self.n_pairs, self.fixed)
+
+    def unbalance_rhs(self, unbalance: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """`unbalance` = F_ext - F_int of the structure, without the gap forces."""
+        rhs = augmented_rhs(unbalance, u, self.C, self.state, self.mu, self.fixed,
+                            self.implicit_slip)
+        rhs[self.n_equations:][self._redundant_active()] = 0.0
+        return rhs
+
+    def split(self, solution: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return solution[:self.n_equations], solution[self.n_equations:]
+
+    def apply(self, multiplier_increment: np.ndarray, u: np.ndarray) -> int:
+        _, d_N, d_T = split_solution(np.concatenate([np.zeros(self.n_equations),
+                                                     multiplier_increment]), self.n_equations)
+        gap_N, gap_T = relative_displacement(self.C, u)
+        self.state, changes = update_states(self.state, self.state.lam_N + d_N,
+                                            self.state.lam_T + d_T, gap_N, gap_T, self.mu,
+                                            reverse_slip=self.reverse_slip)
+        return changes
+
+    def counts(self) -> dict[str, int]:
+        return {f"gap_{name}": n for name, n in count_states(self.committed).items()}
+
+    def friction_work_increment(self) -> float:
+        return self._friction_work
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        s = self.committed
+        return {"interface/state": s.state, "interface/lam_N": s.lam_N,
+                "interface/lam_T": s.lam_T, "interface/gap_N": s.gap_N,
+                "interface/gap_T": s.gap_T}
