@@ -100,6 +100,10 @@ def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool) 
         shares = ", ".join(f"{k} {v:.3f} s" for k, v in t.items() if k != "total")
         click.echo(f"{report.status}: {report.n_steps} steps -> {report.path}")
         click.echo(f"time {t.get('total', 0.0):.3f} s ({shares})")
+    if report.status != "completed":
+        click.echo(f"error: the analysis stopped ({report.reason}); the {report.n_steps} "
+                   f"converged steps are in {report.path}", err=True)
+        sys.exit(1)
 
 
 @main.command()

@@ -130,6 +130,15 @@ class Concrete:
     k_c: float | None = option(None, doc="compressive decay (default eq. 3.34 corrected)",
                                exclusive_minimum=0.0)
     surface: Surface = option(Surface(), doc="ultimate-surface calibration")
+    trial_stress: str = option("total", doc="trial stress of Fig. 3.12 step 3: total = secant "
+                               "matrix of the committed moduli times the total strain in the "
+                               "new axes; incremental = committed stress rotated into the new "
+                               "axes plus C dEps (forward Euler, sub-stepped)",
+                               choices=("total", "incremental"))
+    substep_ratio: float = option(0.5, doc="largest strain sub-step of the stress update, as a "
+                                  "fraction of the cracking strain f't/E (forward-Euler "
+                                  "accuracy of Fig. 3.12 over large increments)",
+                                  exclusive_minimum=0.0, maximum=1000.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -163,6 +172,10 @@ class Interface:
                              maximum=2.0)
     reset_slip_each_step: bool = option(True, doc="slipped pairs start every step fixed "
                                         "(thesis 3.3.4)")
+    max_state_changes: int = option(6, doc="state changes a pair may make within one step "
+                                    "before it is frozen for the rest of the step (limit "
+                                    "cycles); the equilibrium norms still decide convergence",
+                                    minimum=1)
     fixed_points_per_core: int = option(2, doc="permanently fixed pairs per core on its top "
                                         "face (thesis 4.3.2; two stop rotation as well as "
                                         "sliding when all other pairs open)", minimum=0,
@@ -244,6 +257,16 @@ class Analysis:
     tolerance_load: float = option(0.05, doc="load norm tolerance (eq. 4.5)",
                                    exclusive_minimum=0.0, maximum=1.0)
     max_iterations: int = option(200, doc="iteration limit per step", minimum=1)
+    concrete_stiffness: str = option("secant-coaxial", doc="concrete moduli of the iteration "
+                                     "matrix: secant-coaxial (secant E_i, nu_i with the G12 that "
+                                     "keeps stress and strain co-axial, errata §3), secant (the "
+                                     "thesis, G12 of eq. 3.21: 150+ iterations per step on "
+                                     "CF-4) or tangent (algorithmic, by differences)",
+                                     choices=("secant", "secant-coaxial", "tangent"))
+    iteration_stiffness_floor: float = option(0.02, doc="concrete moduli in the iteration "
+                                              "matrix are kept above this fraction of their "
+                                              "initial values (stresses unaffected; 0 = pure "
+                                              "secant, the thesis)", minimum=0.0, maximum=1.0)
     max_step_cuts: int = option(4, doc="halvings of a failed increment before the run stops",
                                 minimum=0, maximum=20)
     stiffness_update: str = option("every_iteration", doc="re-form the (secant) stiffness every "

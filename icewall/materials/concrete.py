@@ -22,6 +22,7 @@ iteration (secant) matrix. `concrete_tangent` gives the algorithmic tangent by d
 
 from __future__ import annotations
 
+from dataclasses import fields, is_dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -75,7 +76,8 @@ def _envelope(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.ndarray,
     return np.where(tensile, t_stress, c_stress), np.where(tensile, t_secant, c_secant)
 
 
-def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str
+def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
+                    trial_stress: str = "incremental"
                     ) -> tuple[np.ndarray, np.ndarray, ConcreteState]:
     """Stress (n, 4), secant moduli (n, 4, 4) and trial state at total strain (n, 4).
 
@@ -105,7 +107,15 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         strain[:, 2] += strain_increment[:, 2]
 
     # Step 3: trial stress; step 4: eps_iu = sigma_lt / E_i (secant; errata 1.1 on eq. 3.8).
-    trial = committed_stress + np.einsum("nij,nj->ni", stiffness, strain_increment)
+    if trial_stress == "total":  # C_l(E^i) eps_l: the secant relation of the committed moduli
+        local_strain = local_normal_components(strain, angle, 1.0)
+        if plane_stress:
+            local_strain[:, 2] = -(stiffness[:, 2, 0] * local_strain[:, 0]
+                                   + stiffness[:, 2, 1] * local_strain[:, 1]) / stiffness[:, 2, 2]
+            strain[:, 2] = local_strain[:, 2]
+        trial = np.einsum("nij,nj->ni", stiffness, local_strain)
+    else:
+        trial = committed_stress + np.einsum("nij,nj->ni", stiffness, strain_increment)
     if plane_stress:
         trial[:, 2] = 0.0
     eps_u = trial / state.secant_modulus
@@ -175,6 +185,18 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     return stress, moduli, trial_state
 
 
+def take_parameters(params: Any, index: np.ndarray, n_points: int) -> Any:
+    """The parameters of the points `index`: per-point arrays (n,) are indexed, scalars kept."""
+    if not is_dataclass(params):
+        return params
+    changes = {}
+    for f in fields(params):
+        value = getattr(params, f.name)
+        if isinstance(value, np.ndarray) and value.shape[:1] == (n_points,):
+            changes[f.name] = value[index]
+    return replace(params, **changes) if changes else params
+
+
 def concrete_tangent(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
                      relative_step: float = 1e-7) -> np.ndarray:
     """Algorithmic tangent d sigma / d eps (n, 4, 4) of `update_concrete` by forward differences.
@@ -192,8 +214,9 @@ def concrete_tangent(strain: np.ndarray, state: ConcreteState, params: Any, form
     perturbed = np.repeat(strain[None], len(columns), axis=0)  # (k, n, 4)
     for k, j in enumerate(columns):
         perturbed[k, :, j] += step
-    repeated = state.take(np.tile(np.arange(n), len(columns)))
-    stressed, _, _ = update_concrete(perturbed.reshape(-1, 4), repeated, params, formulation)
+    index = np.tile(np.arange(n), len(columns))
+    stressed, _, _ = update_concrete(perturbed.reshape(-1, 4), state.take(index),
+                                     take_parameters(params, index, n), formulation)
     difference = (stressed.reshape(len(columns), n, 4) - base[None]) / step[None, :, None]
     tangent = np.zeros((n, 4, 4))
     for k, j in enumerate(columns):

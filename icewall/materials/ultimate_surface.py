@@ -135,10 +135,11 @@ def octahedral_invariants(principal: ArrayLike, fc: float) -> tuple[np.ndarray, 
     """(sigma_bar, tau_bar): eq. 3.12a and eq. 3.12b corrected per errata §1.1,
     tau_bar = sqrt(s_ij s_ij / 5) / f'c (uniaxial compression -> (-1/3, sqrt(2/15)))."""
     p = _sorted(principal)
-    m = p.mean(axis=1)
-    dev = p - m[:, None]  # eq. 3.14
+    s1, s2, s3 = p[:, 0], p[:, 1], p[:, 2]  # columns, not axis-1 reductions: several times faster
+    m = (s1 + s2 + s3) / 3.0
+    d1, d2, d3 = s1 - m, s2 - m, s3 - m  # eq. 3.14
     # eq. 3.12a; eq. 3.12b corrected per errata §1.1: sqrt(s_ij s_ij / 5) / f'c
-    return m / fc, np.sqrt(np.sum(dev * dev, axis=1) / 5.0) / fc
+    return m / fc, np.sqrt((d1 * d1 + d2 * d2 + d3 * d3) / 5.0) / fc
 
 
 def lode_angle(principal: ArrayLike) -> np.ndarray:
@@ -151,8 +152,39 @@ def lode_angle(principal: ArrayLike) -> np.ndarray:
     # eq. 3.13 corrected per errata §1.1 (2 s1 - s2 - s3, sqrt2 in the denominator), in atan2
     # form: |(x, y)| = sqrt2 sqrt(q), so cos theta = x/|(x, y)|; accurate near 0 and 60 deg
     x, y = 2.0 * s1 - s2 - s3, np.sqrt(3.0) * (s2 - s3)
-    ok = np.hypot(x, y) > 1e-12 * np.max(np.abs(p), axis=1)
+    ok = np.hypot(x, y) > 1e-12 * np.maximum(np.abs(s1), np.abs(s3))  # max |s_i| (sorted)
     return np.where(ok, np.clip(np.arctan2(y, x), 0.0, np.pi / 3.0), 0.0)
+
+
+def _elliptic_radius(c: np.ndarray, r1: np.ndarray, r2: np.ndarray,
+                     dr1: np.ndarray | None = None, dr2: np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray | None]:
+    """Core of `meridian_radius` at c = cos theta: (r, dr), dr the derivative of r for the
+    meridian derivatives dr1, dr2 (None unless both are given; one-sided at the clamps)."""
+    pos = r2 > 0.0
+    half_r2 = 0.5 * r2
+    r1c = np.clip(r1, half_r2, r2)  # r1 = minimum radius (glossary corrected, errata §1.1)
+    r12 = r2 * r2 - r1c * r1c  # eq. 3.17
+    q = 4.0 * r12 * c * c
+    root = np.sqrt(np.maximum(q + 5.0 * r1c * r1c - 4.0 * r1c * r2, 0.0))
+    # eq. 3.16 corrected per errata §1.1 (numerator 2 r2 (r2^2 - r1^2) cos theta, not 2 r1 r2)
+    e = 2.0 * r1c - r2
+    num = 2.0 * r2 * r12 * c + r2 * e * root
+    den = np.where(pos & (q + e * e > 0.0), q + e * e, 1.0)
+    r = np.where(pos, num / den, np.minimum(r1, r2))
+    if dr1 is None or dr2 is None:
+        return r, None
+    # d/dt of num / den with r1c = clip(r1, r2/2, r2); the 1/sqrt term is dropped where the
+    # root vanishes (only r1 = r2/2 at theta = 60 deg, where its factor 2 r1 - r2 is 0 too)
+    dr1c = np.where(r1 < half_r2, 0.5 * dr2, np.where(r1 > r2, dr2, dr1))
+    dr12 = 2.0 * (r2 * dr2 - r1c * dr1c)
+    dq = 4.0 * dr12 * c * c
+    de = 2.0 * dr1c - dr2
+    drad = dq + 10.0 * r1c * dr1c - 4.0 * (dr1c * r2 + r1c * dr2)
+    droot = np.where(root > 0.0, 0.5 * drad / np.where(root > 0.0, root, 1.0), 0.0)
+    dnum = 2.0 * c * (dr2 * r12 + r2 * dr12) + (dr2 * e + r2 * de) * root + r2 * e * droot
+    dden = dq + 2.0 * e * de
+    return r, np.where(pos, (dnum - r * dden) / den, np.where(r1 < r2, dr1, dr2))
 
 
 def meridian_radius(theta: ArrayLike, r1: ArrayLike, r2: ArrayLike, *,
@@ -164,18 +196,11 @@ def meridian_radius(theta: ArrayLike, r1: ArrayLike, r2: ArrayLike, *,
     Where r2 <= 0 (beyond the apex) r = min(r1, r2) <= 0, i.e. outside the surface.
     """
     th, r1a, r2a = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (theta, r1, r2)))
-    pos = r2a > 0.0
+    r, _ = _elliptic_radius(np.cos(th), r1a, r2a)
+    if not return_clamped:
+        return r
     tol = 1e-12 * np.abs(r2a)
-    clamped = pos & ((r1a < 0.5 * r2a - tol) | (r1a > r2a + tol))
-    r1c = np.clip(r1a, 0.5 * r2a, r2a)  # r1 = minimum radius (glossary corrected, errata §1.1)
-    c = np.cos(th)
-    r12 = r2a * r2a - r1c * r1c  # eq. 3.17
-    rad = np.maximum(4.0 * r12 * c * c + 5.0 * r1c * r1c - 4.0 * r1c * r2a, 0.0)
-    # eq. 3.16 corrected per errata §1.1 (numerator 2 r2 (r2^2 - r1^2) cos theta, not 2 r1 r2)
-    num = 2.0 * r2a * r12 * c + r2a * (2.0 * r1c - r2a) * np.sqrt(rad)
-    den = 4.0 * r12 * c * c + (r2a - 2.0 * r1c) ** 2
-    r = np.where(pos, num / np.where(pos & (den > 0.0), den, 1.0), np.minimum(r1a, r2a))
-    return (r, clamped) if return_clamped else r
+    return r, (r2a > 0.0) & ((r1a < 0.5 * r2a - tol) | (r1a > r2a + tol))
 
 
 def failure_function(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface
@@ -186,38 +211,101 @@ def failure_function(principal: ArrayLike, fc: float, surface: WillamWarnkeSurfa
     return tb - meridian_radius(lode_angle(principal), r1, r2)
 
 
+def _ray_function(t: np.ndarray, sb: np.ndarray, tb: np.ndarray, c: np.ndarray,
+                  surface: WillamWarnkeSurface, slope: bool = True
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
+    """f(t) = t tau_bar - r(theta, r1(t sigma_bar), r2(t sigma_bar)) on the unit ray (sigma_bar,
+    tau_bar, cos theta) and, with ``slope``, df/dt (the meridians are held below ``sigma_limit``:
+    zero slope there)."""
+    x = t * sb
+    s = np.maximum(x, surface.sigma_limit)
+    a, b = surface.a, surface.b
+    if not slope:
+        return t * tb - _elliptic_radius(c, _poly(a, s), _poly(b, s))[0], None
+    ds = np.where(x >= surface.sigma_limit, sb, 0.0)
+    r, dr = _elliptic_radius(c, _poly(a, s), _poly(b, s), (a[1] + 2.0 * a[2] * s) * ds,
+                             (b[1] + 2.0 * b[2] * s) * ds)
+    return t * tb - r, tb - dr  # type: ignore[operator]
+
+
+def _meridian_root(coef: tuple[float, ...] | tuple[np.ndarray, ...], sb: np.ndarray,
+                   tb: np.ndarray, sigma_limit: float, cap: float) -> np.ndarray:
+    """Smallest t > 0 with t tau_bar = m(t sigma_bar) for the meridian m = k0 + k1 s + k2 s^2
+    (k0 > 0), held at ``sigma_limit`` below it; ``cap`` where there is none below the cap."""
+    k0, k1, k2 = coef
+    qa, qb = k2 * sb * sb, k1 * sb - tb  # qa t^2 + qb t + k0 = 0 above sigma_limit
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t = 2.0 * k0 / (-qb + np.sqrt(qb * qb - 4.0 * qa * k0))  # the smaller root, if real
+        held = (k0 + (k1 + k2 * sigma_limit) * sigma_limit) / tb  # t tau_bar = m(sigma_limit)
+        t = np.where(t * sb >= sigma_limit, t, np.where(held * sb < sigma_limit, held, cap))
+    return np.where((t > 0.0) & (t < cap), t, cap)  # NaN -> cap
+
+
 def strength_scale(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface,
                    max_scale: float = 100.0, iterations: int = 60, *,
                    return_capped: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-    """s > 0 with f(s sigma) = 0 on the proportional ray (vectorised bisection).
+    """s > 0 with f(s sigma) = 0 on the proportional ray (vectorised safeguarded Newton).
 
     ``max_scale`` caps the strength point: max_i |s sigma_i| <= max_scale f'c. Rays that do not
-    meet the surface within it (hydrostatic compression, the open cylinder) return the cap, as
-    does a zero stress state (with |sigma| taken as 1e-12 f'c). Always finite. With
-    ``return_capped`` also returns the mask of capped rays (for warnings). f(0) < 0 and f
-    changes sign once along a ray (meridians concave down to ``sigma_limit``, constant beyond;
-    checked by the property test), so bisection on [0, cap] finds it.
+    meet the surface within it (f(cap) < 0: hydrostatic compression, the open cylinder) return
+    the cap, as does a zero stress state (with |sigma| taken as 1e-12 f'c). Always finite. With
+    ``return_capped`` also returns the mask of capped rays (for warnings).
+
+    Along a ray theta is constant and sigma_bar, tau_bar scale with t: f(t) = t tau_bar -
+    r(theta, r1(t sigma_bar), r2(t sigma_bar)), with an analytic df/dt. f(0) < 0 and f changes
+    sign once (meridians concave down to ``sigma_limit``, constant beyond: f convex in t;
+    checked by the property test). r1 <= r <= r2 (r <= r2 also beyond the apex), so the root of
+    t tau_bar = r2 bounds it from above; the start is the root for the meridian r1 + w (r2 -
+    r1), w = 2 (1 - cos theta) (exact at 0 and 60 deg; mostly within 5 %), and Newton converges
+    in 2-5 steps. Safeguards as in rtsafe (Numerical Recipes): a bracket [lo, hi] with f(lo) <
+    0 <= f(hi) (hi first the r2 bound) is kept, and a step leaving it, a non-positive slope or
+    a step not halving on the one before last becomes a bisection, so non-convex cases (clamped
+    r1, other calibrations) still converge. A ray stops at a Newton step below 1e-12 t (its
+    error is then ~1e-24 t, i.e. round-off) or a bracket that narrow; ``iterations`` bounds
+    the steps (each at worst a bisection; the bracket midpoint is returned after the last).
     """
+    tol = 1e-12
     p = _sorted(principal) / fc
-    mag = np.maximum(np.max(np.abs(p), axis=1), 1e-12)
+    mag = np.maximum(np.maximum(np.abs(p[:, 0]), np.abs(p[:, 2])), 1e-12)  # max |p_i| (sorted)
     d = p / mag[:, None]  # unit direction, max-norm 1
     sb, tb = octahedral_invariants(d, 1.0)
-    th = lode_angle(d)
-
-    def f(t: np.ndarray) -> np.ndarray:
-        r1, r2 = surface.meridians(t * sb)
-        return t * tb - meridian_radius(th, r1, r2)
-
-    lo = np.zeros_like(mag)
-    hi = np.full_like(mag, float(max_scale))
-    meets = f(hi) >= 0.0
+    c = np.cos(lode_angle(d))
+    cap = float(max_scale)
+    meets = _ray_function(np.full_like(mag, cap), sb, tb, c, surface, slope=False)[0] >= 0.0
+    t_out = np.full_like(mag, cap)
+    rows = np.nonzero(meets)[0]
+    sb, tb, c = sb[rows], tb[rows], c[rows]
+    a, b, lim = surface.a, surface.b, surface.sigma_limit
+    hi = _meridian_root(b, sb, tb, lim, cap)
+    w = 2.0 * (1.0 - c)
+    x = np.minimum(_meridian_root(tuple(ai + w * (bi - ai) for ai, bi in zip(a, b, strict=True)),
+                                  sb, tb, lim, cap), hi)
+    lo = np.zeros_like(x)
+    step_old, step = np.full_like(x, cap), np.full_like(x, cap)
     for _ in range(iterations):
+        if rows.size == 0:
+            break
+        fx, dfx = _ray_function(x, sb, tb, c, surface)
+        above = fx >= 0.0
+        hi, lo = np.where(above, x, hi), np.where(above, lo, x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = fx / dfx  # type: ignore[operator]
+        x_new = x - newton
+        positive = dfx > 0.0  # type: ignore[operator]
+        # a step below tol t may round onto lo or hi: take it before the bracket test, and stop
+        small = positive & (np.abs(newton) <= tol * x)
+        ok = positive & (x_new > lo) & (x_new < hi) & (np.abs(newton) <= 0.5 * np.abs(step_old))
         mid = 0.5 * (lo + hi)
-        out = f(mid) >= 0.0
-        hi = np.where(out, mid, hi)
-        lo = np.where(out, lo, mid)
-    t = np.where(meets, 0.5 * (lo + hi), float(max_scale))
-    return (t / mag, ~meets) if return_capped else t / mag
+        step_old, step = step, np.where(ok, newton, x - mid)
+        x = np.where(small | ok, x_new, mid)
+        done = small | (hi - lo <= tol * hi)
+        if done.any():
+            t_out[rows[done]] = x[done]
+            keep = ~done
+            rows, sb, tb, c = rows[keep], sb[keep], tb[keep], c[keep]
+            x, lo, hi, step_old, step = x[keep], lo[keep], hi[keep], step_old[keep], step[keep]
+    t_out[rows] = 0.5 * (lo + hi)  # not converged within ``iterations``: bracket midpoint
+    return (t_out / mag, ~meets) if return_capped else t_out / mag
 
 
 def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParameters, *,

@@ -131,19 +131,68 @@ def build_groups(deck: Deck, cell_material: np.ndarray, gauss_spacing: np.ndarra
 
 def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
                     gauss_spacing: np.ndarray, n_gauss_points: int) -> MaterialGroup:
-    from icewall.materials.concrete import ConcreteState, update_concrete
+    from icewall.materials.concrete import ConcreteState, concrete_tangent
+    from icewall.materials.substep import update_concrete_substepped
 
     c = deck.materials.concrete
     fixed = {key: getattr(c, key) for key in ("k_t", "k_c") if getattr(c, key) is not None}
     h_points = np.repeat(gauss_spacing[cells], n_gauss_points)
     point_params = concrete_point_parameters(params, h_points, fixed)
     formulation = deck.analysis.formulation
+    max_step = c.substep_ratio * params.eps_t  # sub-steps of a fraction of the cracking strain
+    floor = deck.analysis.iteration_stiffness_floor
+    trial_kind = c.trial_stress
+    tangent = deck.analysis.concrete_stiffness == "tangent"
+    coaxial = deck.analysis.concrete_stiffness == "secant-coaxial"
 
     def law(strain, state, p):
-        return update_concrete(strain, state, p, formulation)
+        stress, moduli, trial = update_concrete_substepped(strain, state, p, formulation,
+                                                           max_step, trial_stress=trial_kind)
+        if tangent:
+            moduli = concrete_tangent(strain, state, p, formulation)
+        elif floor > 0.0 or coaxial:
+            moduli = floored_moduli(trial, p, formulation, floor, coaxial)
+        return stress, moduli, trial
 
     return MaterialGroup("concrete", "rotating_crack", cells, law, point_params,
                          ConcreteState.initial(h_points.size, params))
+
+
+def coaxial_shear_modulus(state: Any) -> np.ndarray:
+    """G = (sigma_1 - sigma_2) / (2 (eps_1 - eps_2)) (errata §3): the shear stiffness that keeps
+    stress and strain co-axial, i.e. the one the rotating-crack stress update really has."""
+    s, e = state.stress, state.strain
+    sign = np.sign((s[:, 0] - s[:, 1]) * (e[:, 0] - e[:, 1]) + s[:, 3] * e[:, 3])
+    stress_radius = np.hypot(s[:, 0] - s[:, 1], 2.0 * s[:, 3])
+    strain_radius = np.hypot(e[:, 0] - e[:, 1], e[:, 3])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        G = sign * stress_radius / (2.0 * strain_radius)
+    return np.where(strain_radius > 1e-12, G, state.shear_modulus)
+
+
+def floored_moduli(state: Any, params: Any, formulation: str, floor: float,
+                   coaxial: bool = False) -> np.ndarray:
+    """Secant moduli of `state` with E_i and G12 held above `floor` times their initial values.
+
+    Only the iteration matrix changes, never the stresses: a fully cracked point (E_i, and by
+    eq. 3.21 G12, near zero) would otherwise leave the secant stiffness matrix nearly singular
+    and the iteration wandering through near-mechanisms.
+    """
+    from icewall.materials.orthotropic import (
+        condense_plane_stress,
+        global_moduli,
+        orthotropic_normal_stiffness,
+    )
+
+    E0, nu0 = float(params.E0), float(params.nu0)
+    normal = orthotropic_normal_stiffness(np.maximum(state.secant_modulus, floor * E0),
+                                          state.poisson_ratio)
+    if formulation == "plane_stress":
+        normal = condense_plane_stress(normal)
+    G0 = E0 / (2.0 * (1.0 + nu0))
+    shear = coaxial_shear_modulus(state) if coaxial else state.shear_modulus
+    shear = np.clip(shear, floor * G0, G0)
+    return global_moduli(normal, shear, state.angle)
 
 
 def _steel_group(deck: Deck, cells: np.ndarray, n_points: int) -> MaterialGroup:

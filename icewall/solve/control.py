@@ -10,6 +10,7 @@ the first iteration and 3.50 afterwards, and absorbs a non-zero first residual).
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Iterator
@@ -27,6 +28,8 @@ from icewall.solve.settings import SolverSettings
 # control displacement it does not (the solver found a distant equilibrium). Halve the step;
 # if the drop persists at the smallest step, stop with reason "snap-back".
 SNAP_BACK_DROP = 0.25
+MIN_RELAXATION = 0.125
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -81,6 +84,12 @@ def _norm(x: np.ndarray) -> float:
     return float(np.sqrt(x @ x))
 
 
+def _external_force_norm(constraints, applied: np.ndarray, internal: np.ndarray) -> float:
+    """|| applied loads on the free equations, reactions on the supported ones ||."""
+    reactions = internal[constraints.fixed]
+    return float(np.sqrt(_norm(applied) ** 2 + reactions @ reactions))
+
+
 def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
              target_deflection: float | None, preload_factor: float) -> Increment:
     """Iterate one increment to convergence. target_deflection None means load control."""
@@ -94,6 +103,7 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
     disp_norm = load_norm = math.inf
     flips = 0
     factor = None
+    relaxation, previous_load_norm = 1.0, math.inf
     for iteration in range(1, settings.max_iterations + 1):
         ev = s.evaluate(u, start.states)
         if not np.all(np.isfinite(ev.internal_force)):
@@ -104,10 +114,15 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
         external = P * R + c.restrict(F_pre)
         structural = c.restrict(external - ev.internal_force)  # F_ext - F_int, no gap forces
         unbalance = structural - c.restrict(c.constraint_force())
-        # eq. 4.5; the reference is the largest load reached, so that the norm stays
-        # meaningful when the load falls towards zero far down the descending branch
-        scale = max(_norm(external), start.load_scale, 1e-30)
+        # eq. 4.5. The reference R is the external force system: applied loads and support
+        # reactions (the load reaches the supports through the structure), and never less than
+        # the largest reached, so the norm stays meaningful far down the descending branch.
+        scale = max(_external_force_norm(c, external, ev.internal_force), start.load_scale,
+                    1e-30)
         load_norm = _norm(unbalance) / scale
+        log.debug("iteration %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
+                  "gap flips %d, Gauss-point flag changes %d", iteration, disp_norm, load_norm,
+                  P, flips, forensics["gauss_flag_changes"][-1])
         # The predictor is not a correction: after it only the load norm can be judged, so it
         # must be met 100 times tighter (a linear problem then converges in one iteration).
         displacement_ok = disp_norm <= settings.tolerance_displacement or (
@@ -137,6 +152,15 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
             dm = dP * m1 + m2
         if not (np.all(np.isfinite(du)) and math.isfinite(dP)):
             raise StepFailed("non-finite displacement correction", "NaN")
+        # Under-relaxation against limit cycles (a few Gauss points switching loading and
+        # unloading every iteration): halve the step when the load norm grew, recover after.
+        if iteration > 2 and load_norm > previous_load_norm:
+            relaxation = max(MIN_RELAXATION, 0.5 * relaxation)
+        else:
+            relaxation = min(1.0, 1.5 * relaxation)
+        previous_load_norm = load_norm
+        # (multipliers are not relaxed: prescribed ones, e.g. zero on open pairs, stay exact)
+        du, dP = relaxation * du, relaxation * dP
         u = u + du
         P = P + dP
         flips = c.apply(dm, u)
@@ -186,9 +210,10 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
         peak_load = max(peak_load, inc.load_factor)
         inc.cuts = round(math.log2(step_size / size))
         inc.wall_time = time.perf_counter() - tic
-        scale = max(state.load_scale, _norm(c.restrict(
-            inc.load_factor * problem.reference_load
-            + (0.0 if problem.preload is None else inc.preload_factor * problem.preload))))
+        applied = c.restrict(inc.load_factor * problem.reference_load + (
+            0.0 if problem.preload is None else inc.preload_factor * problem.preload))
+        scale = max(state.load_scale, _external_force_norm(c, applied,
+                                                           inc.evaluation.internal_force))
         state = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
                           inc.preload_factor, scale)
         current = goal

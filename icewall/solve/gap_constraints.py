@@ -6,6 +6,8 @@ multipliers are unknowns of the augmented system (eq. 3.35) solved with a sparse
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -59,9 +61,13 @@ class GapConstraints:
         self.committed = GapState.initial(self.n_pairs, permanent=permanent)
         self.state = self.committed
         self._friction_work = 0.0
+        self.max_changes = interface.max_state_changes
+        self.changes_in_step = np.zeros(self.n_pairs, dtype=int)
+        self.frozen_pairs = 0
 
     def begin_step(self) -> None:
         self.state = new_step(self.committed, reset_slip=self.reset_slip)
+        self.changes_in_step = np.zeros(self.n_pairs, dtype=int)
 
     def commit(self) -> None:
         self._friction_work = friction_work_increment(self.committed, self.state)
@@ -103,13 +109,28 @@ class GapConstraints:
         _, d_N, d_T = split_solution(np.concatenate([np.zeros(self.n_equations),
                                                      multiplier_increment]), self.n_equations)
         gap_N, gap_T = relative_displacement(self.C, u)
-        self.state, changes = update_states(self.state, self.state.lam_N + d_N,
-                                            self.state.lam_T + d_T, gap_N, gap_T, self.mu,
-                                            reverse_slip=self.reverse_slip)
-        return changes
+        old = self.state
+        new, _ = update_states(old, old.lam_N + d_N, old.lam_T + d_T, gap_N, gap_T, self.mu,
+                               reverse_slip=self.reverse_slip)
+        changed = (new.state != old.state) | (new.lam_T * old.lam_T < 0)
+        # A pair that keeps changing state within one step (a limit cycle such as
+        # fixed -> free -> fixed -> slip -> fixed) is frozen in its current state for the
+        # rest of the step; the equilibrium norms then decide convergence, as in the thesis.
+        frozen = changed & (self.changes_in_step >= self.max_changes)
+        if frozen.any():
+            new = replace(new, state=np.where(frozen, old.state, new.state),
+                          stick_T=np.where(frozen, old.stick_T, new.stick_T),
+                          lam_T=np.where(frozen, old.lam_T + d_T, new.lam_T))
+            changed &= ~frozen
+        self.changes_in_step += changed
+        self.frozen_pairs = int(np.count_nonzero(self.changes_in_step >= self.max_changes))
+        self.state = new
+        return int(np.count_nonzero(changed))
 
     def counts(self) -> dict[str, int]:
-        return {f"gap_{name}": n for name, n in count_states(self.committed).items()}
+        counts = {f"gap_{name}": n for name, n in count_states(self.committed).items()}
+        counts["gap_frozen"] = self.frozen_pairs
+        return counts
 
     def friction_work_increment(self) -> float:
         return self._friction_work

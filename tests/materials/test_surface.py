@@ -240,3 +240,85 @@ def test_property_scaled_state_on_surface(x: np.ndarray) -> None:
     f = failure_function(s[:, None] * sig, FC, S)
     assert np.all(np.abs(f[ok]) < 1e-9)
     assert np.all(np.isfinite(equivalent_uniaxial_strengths(sig, P)))
+
+
+def _reference_scale(principal: np.ndarray, surface: WillamWarnkeSurface, cap: float = 100.0
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """High-accuracy reference for strength_scale: 100 bisection steps on [0, cap] (bracket
+    100 / 2^100, far below round-off) of the public failure_function on the unit ray."""
+    p = np.asarray(principal, float) / FC
+    mag = np.maximum(np.max(np.abs(p), axis=1), 1e-12)
+    d = p / mag[:, None] * FC
+    lo, hi = np.zeros(len(p)), np.full(len(p), cap)
+    capped = failure_function(cap * d, FC, surface) < 0.0
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        out = failure_function(mid[:, None] * d, FC, surface) >= 0.0
+        lo, hi = np.where(out, lo, mid), np.where(out, mid, hi)
+    return np.where(capped, cap, 0.5 * (lo + hi)) / mag, capped
+
+
+def _test_rays(rng: np.random.Generator) -> tuple[np.ndarray, dict[str, slice]]:
+    """Random rays in families (given / f'c, before random scaling)."""
+    families = {
+        "generic": rng.normal(size=(1500, 3)),
+        "near-apex tension": np.vstack([[1, 1, 1], [2, 2, 2], [1, 1, 0.999],
+                                        1 + 1e-3 * rng.normal(size=(300, 3))]),
+        "pure shear": np.vstack([[1, 0, -1], [0.5, 0, -0.5], [0.5, 0, -0.5 + 1e-12],
+                                 [1, 0, -1] + 1e-3 * rng.normal(size=(300, 3))]),
+        "deep compression": -1 + 0.15 * rng.normal(size=(400, 3)),
+        "hydrostatic compression": np.vstack([[-1, -1, -1], [-3, -3, -3],
+                                              -1 + 1e-6 * rng.normal(size=(50, 3))]),
+        "classic": np.array([[0, 0, -1], [0, -1, -1], [1, 0, 0], [1, 1, 0], [0, -0.5, -1],
+                             [0.05, 0, -1], [0, 0, 0]], float),
+    }
+    slices, start = {}, 0
+    for name, rays in families.items():
+        slices[name] = slice(start, start + len(rays))
+        start += len(rays)
+    x = np.vstack(list(families.values()))
+    return x * 10.0 ** rng.uniform(-3, 3, size=(len(x), 1)), slices
+
+
+@pytest.mark.parametrize("surface", [S, SET_A_ELWI_MURRAY, elwi_murray_refit(0.045),
+                                     default_surface(0.030), default_surface(0.074),
+                                     WillamWarnkeSurface(S.a, S.b, sigma_cut=-1.0)],
+                         ids=["CF-4", "set A", "A refit", "ft 0.030", "ft 0.074", "cut -1"])
+def test_strength_scale_matches_bisection_reference(surface: WillamWarnkeSurface) -> None:
+    """Safeguarded Newton vs a 100-step bisection of the public failure function: same caps,
+    roots within 1e-11 relative (round-off level ~1e-14), f = 0 there; it needs at most a few
+    iterations (bisection to this accuracy would need about 50)."""
+    x, fam = _test_rays(np.random.default_rng(2024))
+    sig = x * FC
+    s, capped = strength_scale(sig, FC, surface, return_capped=True)
+    ref, ref_capped = _reference_scale(sig, surface)
+    assert np.array_equal(capped, ref_capped)
+    assert np.all(capped[fam["hydrostatic compression"]]) and capped[-1]  # and the zero state
+    assert not np.any(capped[fam["generic"]]) and not np.any(capped[fam["pure shear"]])
+    assert np.array_equal(s[capped], ref[capped])  # the cap, max |s sigma_i| = 100 f'c
+    assert np.max(np.abs(s - ref) / ref) < 1e-11
+    f = failure_function(s[~capped, None] * sig[~capped], FC, surface)
+    assert np.max(np.abs(f)) < 1e-11
+    # the families reach what they are meant to: the apex, the held cylinder
+    sb = octahedral_invariants(s[:, None] * sig, FC)[0]
+    assert np.allclose(sb[fam["near-apex tension"]][:2], surface.apex, rtol=1e-4)  # set A: r2
+    assert np.count_nonzero(sb[fam["deep compression"]] < surface.sigma_limit) >= 50
+    assert np.array_equal(strength_scale(sig, FC, surface, iterations=8), s)
+
+
+def test_ray_function_slope_matches_differences() -> None:
+    from icewall.materials.ultimate_surface import _ray_function
+
+    rng = np.random.default_rng(7)
+    d = -np.sort(-rng.normal(size=(3000, 3)), axis=1)
+    d /= np.max(np.abs(d), axis=1, keepdims=True)
+    sb, tb = octahedral_invariants(d, 1.0)
+    c = np.cos(lode_angle(d))
+    t = rng.uniform(0.05, 3.0, size=len(d))
+    h = 1e-6 * t
+    _, slope = _ray_function(t, sb, tb, c, S)
+    fp, _ = _ray_function(t + h, sb, tb, c, S)
+    fm, _ = _ray_function(t - h, sb, tb, c, S)
+    x = t * sb
+    smooth = (np.abs(x - S.sigma_limit) > 1e-3) & (np.abs(x - S.apex) > 1e-3)
+    assert np.allclose(((fp - fm) / (2 * h))[smooth], slope[smooth], rtol=1e-6, atol=1e-8)

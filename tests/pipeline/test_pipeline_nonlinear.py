@@ -1,0 +1,92 @@
+"""The nonlinear CF-4 analysis end to end, checked from the stored result independently of the
+solver: equilibrium of every stored step, interface laws, energy balance, a traced peak."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from icewall.deck.load import load_deck
+from icewall.fem.kinematics import internal_force_blocks
+from icewall.interface.gap import FIXED, FREE, SLIP, constraint_matrix
+from icewall.mesh.build import build_mesh, region_materials
+from icewall.model.build import build_model
+from icewall.pipeline import run_deck
+from icewall.results.reader import open_result
+
+DECKS = Path(__file__).resolve().parents[2] / "decks"
+# Plane stress traces the CF-4 peak within a short range (see the closing notes of issue 4).
+OVERRIDES = ["analysis.solver=nonlinear", "analysis.formulation=plane_stress",
+             "loads.control.target=14", "outputs.fields=[displacement, stress, strain, state]"]
+
+
+@pytest.fixture(scope="module")
+def cf4_nonlinear(tmp_path_factory):
+    loaded = load_deck(DECKS / "cf4.yaml", OVERRIDES)
+    report = run_deck(loaded, tmp_path_factory.mktemp("nl") / "cf4.h5")
+    deck = loaded.deck
+    mesh = build_mesh(deck)
+    model = build_model(deck, mesh, region_materials(deck))
+    return deck, model, report
+
+
+def test_runs_to_target_and_traces_a_peak(cf4_nonlinear):
+    _, _, report = cf4_nonlinear
+    assert report.status == "completed"
+    with open_result(report.path) as res:
+        h = res.history
+        assert h["control_displacement"][-1] == pytest.approx(14.0)
+        assert np.all(np.isfinite(h["load"]))
+        peak = int(np.argmax(h["load"]))
+        assert 0 < peak < len(h["load"]) - 1  # the load rises, peaks and falls within 14 mm
+        assert h["cracked_in_plane"][-1] > 0 and h["yielded"][-1] >= 0
+
+
+def test_every_stored_step_is_in_equilibrium(cf4_nonlinear):
+    deck, model, report = cf4_nonlinear
+    C = constraint_matrix(model.mesh.interface_pairs, model.mesh.interface_normals,
+                          model.dof_map.node_equations, model.dof_map.n_equations)
+    free = np.setdiff1d(np.arange(model.dof_map.n_equations), model.fixed)
+    with open_result(report.path) as res:
+        for step in res.steps:
+            stress = res.gauss(step, "stress")
+            lam = np.column_stack([res.array(step, "interface/lam_N"),
+                                   res.array(step, "interface/lam_T")]).ravel()
+            P = res.history["load_factor"][step - 1]
+            f_int = model.assembler.vector(internal_force_blocks(model.kinematics, stress))
+            residual = (P * model.reference_load - f_int - C.T @ lam)[free]
+            reactions = f_int[model.fixed] + (C.T @ lam)[model.fixed]
+            reference = np.sqrt(np.sum((P * model.reference_load) ** 2) + reactions @ reactions)
+            assert np.linalg.norm(residual) <= deck.analysis.tolerance_load * reference
+
+
+def test_interface_laws_hold_at_converged_steps(cf4_nonlinear):
+    deck, _, report = cf4_nonlinear
+    mu = deck.materials.interface.friction
+    with open_result(report.path) as res:
+        for step in res.steps:
+            state = res.array(step, "interface/state")
+            lam_N = res.array(step, "interface/lam_N")
+            lam_T = res.array(step, "interface/lam_T")
+            scale = np.abs(lam_N).max()
+            assert np.all(lam_N[state == FREE] == 0) and np.all(lam_T[state == FREE] == 0)
+            slip = state == SLIP
+            assert np.allclose(np.abs(lam_T[slip]), mu * np.abs(lam_N[slip]),
+                               atol=0.05 * scale)
+            assert set(np.unique(state)) <= {FIXED, SLIP, FREE}
+
+
+def test_energy_balance(cf4_nonlinear):
+    _, _, report = cf4_nonlinear
+    with open_result(report.path) as res:
+        h = res.history
+        # trapezoidal work over 1 mm steps: the first steps (cracking and slip starting
+        # within a step) carry an error of O(1e4) N mm that stays small against the total
+        late = h["external_work"] > 0.2 * h["external_work"][-1]
+        assert np.all(np.abs(h["energy_imbalance"][late]) <= 0.02 * h["external_work"][late])
+        parts = (h["elastic_energy"] + h["concrete_dissipation"] + h["plastic_work"]
+                 + h["friction_work"] + h["energy_imbalance"])
+        assert np.allclose(parts, h["external_work"])
+        assert np.all(h["friction_work"] >= -1e-6 * h["external_work"])
