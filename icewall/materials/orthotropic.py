@@ -14,9 +14,6 @@ ANGLE_TOLERANCE = 1e-9
 """In-plane principal-strain radius, relative to the strain size, below which beta is kept."""
 
 
-AXIS_LABELS = "nearest"
-
-
 def principal_strain_angle(strain: np.ndarray, previous_angle: np.ndarray) -> np.ndarray:
     """Orthotropy angle beta (n,) of the in-plane principal strain axes (rotating crack, §3.2.2).
 
@@ -30,10 +27,7 @@ def principal_strain_angle(strain: np.ndarray, previous_angle: np.ndarray) -> np
     size = np.abs(strain[:, :2]).max(axis=1) + np.abs(half_shear)
     major = 0.5 * np.arctan2(half_shear, half_difference)  # direction of the major strain
     # distance from the previous angle modulo pi/2 (both labellings), in [-pi/4, pi/4)
-    if AXIS_LABELS == "major":  # direction 1 is always the major principal strain
-        delta = np.mod(major - previous_angle + 0.5 * np.pi, np.pi) - 0.5 * np.pi
-    else:
-        delta = np.mod(major - previous_angle + 0.25 * np.pi, 0.5 * np.pi) - 0.25 * np.pi
+    delta = np.mod(major - previous_angle + 0.25 * np.pi, 0.5 * np.pi) - 0.25 * np.pi
     defined = radius > ANGLE_TOLERANCE * size
     return np.where(defined, previous_angle + delta, previous_angle)
 
