@@ -7,7 +7,7 @@ trial_state)`, over all Gauss points of its group at once.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, make_dataclass
 from typing import Any
 
 import numpy as np
@@ -41,25 +41,10 @@ def _elastic_law(strain: np.ndarray, state: None, params: ElasticParameters):
     return strain @ params.moduli.T, moduli, state
 
 
-@dataclass(frozen=True)
-class ConcretePointParameters:
-    """ConcreteParameters with the crack-band quantities per Gauss point (h_c, k_t, k_c)."""
-
-    fc: float
-    E0: float
-    ft: float
-    eps_c: float
-    eps_t: float
-    nu0: float
-    Gf: float
-    alpha: float
-    G_cr: float
-    h_c: np.ndarray
-    k_t: np.ndarray
-    k_c: np.ndarray
-    nu_max: float
-    surface: Any
-    peak_strain_slope: float
+# ConcreteParameters with the crack-band quantities (h_c, k_t, k_c) as per-point arrays; the
+# same fields, without the scalar validation of ConcreteParameters.
+ConcretePointParameters = make_dataclass(
+    "ConcretePointParameters", [(f.name, Any) for f in fields(ConcreteParameters)], frozen=True)
 
 
 def concrete_point_parameters(params: ConcreteParameters, h_c: np.ndarray,
