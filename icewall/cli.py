@@ -34,11 +34,17 @@ def _handle_errors(func):
 
 @click.group()
 @click.version_option(__version__, prog_name="icewall")
-def main() -> None:
+@click.option("-v", "--verbose", count=True, help="-v: solver messages; -vv: every iteration.")
+def main(verbose: int) -> None:
     """Nonlinear FE analysis of steel-concrete-steel composite ice-resisting walls.
 
     Units: N, mm, MPa.
     """
+    if verbose:
+        import logging
+
+        logging.basicConfig(format="%(message)s", stream=sys.stderr)
+        logging.getLogger("icewall").setLevel(logging.DEBUG if verbose > 1 else logging.INFO)
 
 
 @main.command()
