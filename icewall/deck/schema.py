@@ -176,10 +176,16 @@ class Interface:
                                     "before it is frozen for the rest of the step (limit "
                                     "cycles); the equilibrium norms still decide convergence",
                                     minimum=1)
-    fixed_points_per_core: int = option(2, doc="permanently fixed pairs per core on its top "
-                                        "face (thesis 4.3.2; two stop rotation as well as "
-                                        "sliding when all other pairs open)", minimum=0,
+    fixed_points_per_core: int = option(0, doc="permanently fixed pairs per core on its top "
+                                        "face (thesis 4.3.2's way to keep a core from "
+                                        "floating; they act as shear connectors and carry far "
+                                        "more shear than friction allows)", minimum=0,
                                         maximum=10)
+    stabilization: float = option(1e-6, doc="weak springs between paired nodes in the "
+                                  "iteration matrix only (relative to the largest stiffness "
+                                  "diagonal): keep a core whose pairs all open in an iterate "
+                                  "from floating, without changing the converged state",
+                                  minimum=0.0, maximum=1e-2)
     friction_update: str = option("implicit", doc="implicit: the Coulomb condition of a "
                                   "slipping pair is a row of the augmented system; lagged: the "
                                   "thesis' T = sign(lam_T) mu |lam_N| - lam_T from the previous "

@@ -62,6 +62,8 @@ class GapConstraints:
         self.state = self.committed
         self._friction_work = 0.0
         self.max_changes = interface.max_state_changes
+        self.stabilization = interface.stabilization
+        self._CtC = (self.C.T @ self.C).tocsr()
         self.changes_in_step = np.zeros(self.n_pairs, dtype=int)
         self.frozen_pairs = 0
 
@@ -88,6 +90,12 @@ class GapConstraints:
         return self.redundant & active_rows(self.state)
 
     def factorize(self, K: sp.spmatrix):
+        if self.stabilization > 0.0:
+            # weak springs on the relative displacement of every pair, in the iteration matrix
+            # only (never in the residual): a core whose pairs are all open in some iterate
+            # does not make the matrix singular, and the converged state is unchanged
+            k = self.stabilization * float(abs(K.diagonal()).max())
+            K = K + k * self._CtC
         A = augmented_matrix(K, self.C, self.state, self.fixed, self.mu, self.implicit_slip)
         pad = np.concatenate([np.zeros(self.n_equations), self._redundant_active()])
         return factorize(A + sp.diags(pad.astype(float)))

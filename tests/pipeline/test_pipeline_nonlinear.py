@@ -19,7 +19,7 @@ from icewall.results.reader import open_result
 DECKS = Path(__file__).resolve().parents[2] / "decks"
 # Plane stress traces the CF-4 peak within a short range (see the closing notes of issue 4).
 OVERRIDES = ["analysis.solver=nonlinear", "analysis.formulation=plane_stress",
-             "loads.control.target=14", "outputs.fields=[displacement, stress, strain, state]"]
+             "loads.control.target=16", "outputs.fields=[displacement, stress, strain, state]"]
 
 
 @pytest.fixture(scope="module")
@@ -37,10 +37,10 @@ def test_runs_to_target_and_traces_a_peak(cf4_nonlinear):
     assert report.status == "completed"
     with open_result(report.path) as res:
         h = res.history
-        assert h["control_displacement"][-1] == pytest.approx(14.0)
+        assert h["control_displacement"][-1] == pytest.approx(16.0)
         assert np.all(np.isfinite(h["load"]))
         peak = int(np.argmax(h["load"]))
-        assert 0 < peak < len(h["load"]) - 1  # the load rises, peaks and falls within 14 mm
+        assert 0 < peak < len(h["load"]) - 1  # the load rises, peaks and falls within 16 mm
         assert h["cracked_in_plane"][-1] > 0 and h["yielded"][-1] >= 0
 
 
