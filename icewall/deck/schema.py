@@ -273,6 +273,19 @@ class Analysis:
                                               "matrix are kept above this fraction of their "
                                               "initial values (stresses unaffected; 0 = pure "
                                               "secant, the thesis)", minimum=0.0, maximum=1.0)
+    acceleration: str = option("aitken", doc="relaxation of the iteration's corrections: "
+                               "aitken (dynamic relaxation from successive corrections), "
+                               "halving (halve when the load norm grows) or none (the thesis)",
+                               choices=("aitken", "halving", "none"))
+    max_flag_changes: int = option(4, doc="times a concrete Gauss point may change its crack "
+                                   "or crush flags within one increment before it may only "
+                                   "unload and reload for the rest of it (chatter damping)",
+                                   minimum=1)
+    on_snap_back: str = option("stop", doc="a load drop that does not shrink with the step "
+                               "(the control displacement snaps back): stop the run with reason "
+                               "snap-back, or continue, accepting the drop as a snap-through "
+                               "(recorded in the history column snap_back)",
+                               choices=("stop", "continue"))
     max_step_cuts: int = option(4, doc="halvings of a failed increment before the run stops",
                                 minimum=0, maximum=20)
     stiffness_update: str = option("every_iteration", doc="re-form the (secant) stiffness every "

@@ -77,7 +77,7 @@ def _envelope(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.ndarray,
 
 
 def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
-                    trial_stress: str = "incremental"
+                    trial_stress: str = "incremental", frozen: np.ndarray | None = None
                     ) -> tuple[np.ndarray, np.ndarray, ConcreteState]:
     """Stress (n, 4), secant moduli (n, 4, 4) and trial state at total strain (n, 4).
 
@@ -135,6 +135,8 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     slack = LOADING_TOLERANCE * (state.max_equivalent_uniaxial_strain + np.abs(
         trial).max(axis=1, keepdims=True) / state.secant_modulus)
     loading = magnitude > state.max_equivalent_uniaxial_strain + slack
+    if frozen is not None:  # the solver's chatter damping: these points only unload/reload
+        loading &= ~np.asarray(frozen, dtype=bool)[:, None]
     rows = np.nonzero(sign_change.any(axis=1))[0]
     if rows.size:
         uniaxial_strength = np.where(eps_u[rows] > 0.0, params.ft, -params.fc)

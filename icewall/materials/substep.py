@@ -22,11 +22,12 @@ from icewall.materials.concrete_state import ConcreteState
 
 def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params: Any,
                                formulation: str, max_strain_step: float,
-                               max_substeps: int = 32, trial_stress: str = "incremental"
+                               max_substeps: int = 32, trial_stress: str = "incremental",
+                               frozen: np.ndarray | None = None
                                ) -> tuple[np.ndarray, np.ndarray, ConcreteState]:
     """`update_concrete` over sub-steps of at most `max_strain_step` per point (pure)."""
-    if trial_stress == "total":  # path-independent trial: no sub-steps needed
-        return update_concrete(strain, state, params, formulation, "total")
+    if trial_stress == "total" or frozen is not None:  # no sub-steps needed / allowed
+        return update_concrete(strain, state, params, formulation, trial_stress, frozen)
     strain = np.asarray(strain, dtype=float).reshape(-1, 4)
     n = strain.shape[0]
     increment = strain - state.strain

@@ -29,6 +29,7 @@ class MaterialGroup:
     law: Law
     params: Any
     initial_state: Any  # None for elastic groups
+    freezable: bool = False  # law accepts frozen=(n,) bool: those points may not load further
 
 
 @dataclass(frozen=True)
@@ -130,9 +131,10 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
     tangent = deck.analysis.concrete_stiffness == "tangent"
     coaxial = deck.analysis.concrete_stiffness == "secant-coaxial"
 
-    def law(strain, state, p):
+    def law(strain, state, p, frozen=None):
         stress, moduli, trial = update_concrete_substepped(strain, state, p, formulation,
-                                                           max_step, trial_stress=trial_kind)
+                                                           max_step, trial_stress=trial_kind,
+                                                           frozen=frozen)
         if tangent:
             moduli = concrete_tangent(strain, state, p, formulation)
         elif floor > 0.0 or coaxial:
@@ -140,7 +142,7 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
         return stress, moduli, trial
 
     return MaterialGroup("concrete", "rotating_crack", cells, law, point_params,
-                         ConcreteState.initial(h_points.size, params))
+                         ConcreteState.initial(h_points.size, params), freezable=True)
 
 
 def coaxial_shear_modulus(state: Any) -> np.ndarray:

@@ -58,15 +58,22 @@ class Structure:
     def nonlinear(self) -> bool:
         return any(g.model != "elastic" for g in self.groups)
 
-    def evaluate(self, u: np.ndarray, states: tuple[Any, ...]) -> Evaluation:
-        """Strains, stresses, moduli and internal forces at equation vector `u`."""
+    def evaluate(self, u: np.ndarray, states: tuple[Any, ...],
+                 frozen: tuple[np.ndarray | None, ...] | None = None) -> Evaluation:
+        """Strains, stresses, moduli and internal forces at equation vector `u`.
+
+        `frozen`, per group, marks points that may only unload/reload in this pass (the
+        solver's chatter damping; used by groups whose law is freezable)."""
         eps = strain(self.kinematics, u)
         stress = np.empty_like(eps)
         moduli = np.empty(eps.shape + (4,))
         trial = []
-        for group, state in zip(self.groups, states, strict=True):
+        frozen = frozen or (None,) * len(self.groups)
+        for group, state, mask in zip(self.groups, states, frozen, strict=True):
             n = group.cells.size * self.n_gauss
-            sig, D, new = group.law(eps[group.cells].reshape(n, 4), state, group.params)
+            extra = {"frozen": mask} if group.freezable and mask is not None else {}
+            sig, D, new = group.law(eps[group.cells].reshape(n, 4), state, group.params,
+                                    **extra)
             stress[group.cells] = sig.reshape(-1, self.n_gauss, 4)
             moduli[group.cells] = np.broadcast_to(D, (n, 4, 4)).reshape(-1, self.n_gauss, 4, 4)
             trial.append(new)

@@ -29,6 +29,7 @@ from icewall.solve.settings import SolverSettings
 # if the drop persists at the smallest step, stop with reason "snap-back".
 SNAP_BACK_DROP = 0.25
 MIN_RELAXATION = 0.125
+MAX_RELAXATION = 1.0
 log = logging.getLogger(__name__)
 
 
@@ -60,6 +61,7 @@ class Increment:
     forensics: dict[str, list[int]] = field(default_factory=dict)
     cuts: int = 0
     wall_time: float = 0.0
+    snap_back: bool = False  # the load dropped in a jump displacement control cannot follow
 
 
 class StepFailed(Exception):
@@ -77,11 +79,56 @@ class Problem:
     reference_load: np.ndarray  # R*, unit jack load on every patch (n_eq,)
     preload: np.ndarray | None  # in-plane load vector (n_eq,), held during control
     control_equation: int  # deflection = -u[control_equation]
-    flag_counter: Any  # callable(states) -> bool array of crack/crush/yield flags
+    point_flags: Any  # callable(states) -> per group (n, k) crack/crush/yield flags or None
+    freezable: tuple[bool, ...] = ()  # per group: may its points be frozen (chatter damping)
 
 
 def _norm(x: np.ndarray) -> float:
     return float(np.sqrt(x @ x))
+
+
+def _chatter(problem: Problem, settings: SolverSettings, states, flags_before, changes,
+             forensics: dict[str, list[int]]) -> tuple | None:
+    """Count Gauss points whose crack/crush/yield flags changed in this iteration; points that
+    changed `max_flag_changes` times in the increment may only unload/reload for the rest of
+    it (they go on loading in the next increment). Returns the per-group frozen masks."""
+    flags = problem.point_flags(states)
+    total, frozen, any_frozen = 0, [], False
+    for k, (new, old) in enumerate(zip(flags, flags_before, strict=True)):
+        if new is None:
+            frozen.append(None)
+            continue
+        changed = np.any(new != old, axis=1)
+        total += int(np.count_nonzero(changed))
+        changes[k] += changed
+        mask = changes[k] >= settings.max_flag_changes
+        freezable = problem.freezable[k] if k < len(problem.freezable) else False
+        frozen.append(mask if freezable and mask.any() else None)
+        any_frozen |= frozen[-1] is not None
+    forensics["gauss_flag_changes"].append(total)
+    forensics.setdefault("gauss_frozen", []).append(
+        int(sum(np.count_nonzero(f) for f in frozen if f is not None)))
+    return tuple(frozen) if any_frozen else None
+
+
+def _relaxation(kind: str, iteration: int, relaxation: float, correction: np.ndarray,
+                previous: np.ndarray | None, load_norm: float, previous_load_norm: float) -> float:
+    """Relaxation of this iteration's correction (the secant iteration is a fixed-point
+    iteration): Aitken's dynamic relaxation from two successive corrections, or halving when
+    the load norm grew. Both damp the limit cycles of Gauss points that switch between
+    loading and unloading every iteration; iteration 1 (the predictor) is never relaxed."""
+    if kind == "none" or iteration < 3 or previous is None:
+        return 1.0
+    if kind == "aitken":
+        difference = correction - previous
+        denominator = float(difference @ difference)
+        if denominator <= 0.0:
+            return relaxation
+        omega = -relaxation * float(previous @ difference) / denominator
+        return float(np.clip(omega, MIN_RELAXATION, MAX_RELAXATION))
+    if load_norm > previous_load_norm:
+        return max(MIN_RELAXATION, 0.5 * relaxation)
+    return min(1.0, 1.5 * relaxation)
 
 
 def _external_force_norm(constraints, applied: np.ndarray, internal: np.ndarray) -> float:
@@ -99,18 +146,19 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
     F_pre = np.zeros_like(u) if problem.preload is None else preload_factor * problem.preload
     c.begin_step()
     forensics: dict[str, list[int]] = {"gauss_flag_changes": [], "gap_flips": []}
-    flags_before = problem.flag_counter(start.states)
+    flags_before = problem.point_flags(start.states)
+    changes = [None if f is None else np.zeros(len(f), dtype=int) for f in flags_before]
+    frozen: tuple | None = None
     disp_norm = load_norm = math.inf
     flips = 0
     factor = None
-    relaxation, previous_load_norm = 1.0, math.inf
+    relaxation, previous_load_norm, previous_correction = 1.0, math.inf, None
     for iteration in range(1, settings.max_iterations + 1):
-        ev = s.evaluate(u, start.states)
+        ev = s.evaluate(u, start.states, frozen)
         if not np.all(np.isfinite(ev.internal_force)):
             raise StepFailed("non-finite internal forces", "NaN")
-        flags = problem.flag_counter(ev.states)
-        forensics["gauss_flag_changes"].append(int(np.count_nonzero(flags != flags_before)))
-        flags_before = flags
+        frozen = _chatter(problem, settings, ev.states, flags_before, changes, forensics)
+        flags_before = problem.point_flags(ev.states)
         external = P * R + c.restrict(F_pre)
         structural = c.restrict(external - ev.internal_force)  # F_ext - F_int, no gap forces
         unbalance = structural - c.restrict(c.constraint_force())
@@ -152,13 +200,9 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
             dm = dP * m1 + m2
         if not (np.all(np.isfinite(du)) and math.isfinite(dP)):
             raise StepFailed("non-finite displacement correction", "NaN")
-        # Under-relaxation against limit cycles (a few Gauss points switching loading and
-        # unloading every iteration): halve the step when the load norm grew, recover after.
-        if iteration > 2 and load_norm > previous_load_norm:
-            relaxation = max(MIN_RELAXATION, 0.5 * relaxation)
-        else:
-            relaxation = min(1.0, 1.5 * relaxation)
-        previous_load_norm = load_norm
+        relaxation = _relaxation(settings.acceleration, iteration, relaxation, du,
+                                 previous_correction, load_norm, previous_load_norm)
+        previous_correction, previous_load_norm = du, load_norm
         # (multipliers are not relaxed: prescribed ones, e.g. zero on open pairs, stay exact)
         du, dP = relaxation * du, relaxation * dP
         u = u + du
@@ -196,7 +240,8 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
                                        reason=reason) from None
             size = 0.5 * size
             continue
-        if kind == "control" and _abrupt_drop(state, inc, peak_load):
+        snap = kind == "control" and _abrupt_drop(state, inc, peak_load)
+        if snap and not (size <= smallest and settings.on_snap_back == "continue"):
             c.rollback()
             if size <= smallest:
                 raise ConvergenceError(
@@ -207,6 +252,10 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
             size = 0.5 * size
             continue
         c.commit()
+        inc.snap_back = bool(snap)  # accepted load drop (on_snap_back: continue)
+        if snap:
+            log.info("snap-back at %.4g mm accepted: load %.4g -> %.4g", goal,
+                     state.load_factor, inc.load_factor)
         peak_load = max(peak_load, inc.load_factor)
         inc.cuts = round(math.log2(step_size / size))
         inc.wall_time = time.perf_counter() - tic

@@ -32,15 +32,17 @@ class StepReport:
         return state_fields(self.structure, self.increment.evaluation.states)
 
 
-def state_flags(groups: tuple[MaterialGroup, ...], states) -> np.ndarray:
-    """All crack/crush/yield flags of all points, concatenated (for change counting)."""
-    parts = []
+def point_flags(groups: tuple[MaterialGroup, ...], states) -> tuple[np.ndarray | None, ...]:
+    """Per group, the crack/crush (concrete) or yield (steel) flags of each point, (n, k)."""
+    flags = []
     for group, state in zip(groups, states, strict=True):
         if group.model == "rotating_crack":
-            parts += [state.cracked.ravel(), state.crushed.ravel()]
+            flags.append(np.concatenate([state.cracked, state.crushed], axis=1))
         elif group.model == "von_mises":
-            parts.append(np.asarray(state.yielded).ravel())
-    return np.concatenate(parts) if parts else np.zeros(0, dtype=bool)
+            flags.append(np.asarray(state.yielded).reshape(-1, 1))
+        else:
+            flags.append(None)
+    return tuple(flags)
 
 
 def state_counts(groups: tuple[MaterialGroup, ...], states) -> dict[str, int]:
@@ -86,7 +88,8 @@ def run_nonlinear(model: Model) -> Iterator[StepReport]:
     structure = Structure(model.kinematics, model.assembler, groups)
     constraints = make_constraints(model, structure)
     problem = Problem(structure, constraints, model.reference_load, model.preload,
-                      model.control_equation, lambda states: state_flags(groups, states))
+                      model.control_equation, lambda states: point_flags(groups, states),
+                      tuple(g.freezable for g in groups))
     settings = solver_settings(deck)
     initial = PathState(np.zeros(model.dof_map.n_equations), 0.0, structure.initial_states())
     energy = EnergyAccount()

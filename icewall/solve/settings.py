@@ -18,6 +18,9 @@ class SolverSettings:
     target: float  # final control displacement, mm
     preload_increments: int  # load-control increments of the in-plane preload
     reset_slip_each_step: bool  # thesis 3.3.4: slipped pairs start each step fixed
+    acceleration: str = "aitken"  # relaxation of the corrections: aitken | halving | none
+    max_flag_changes: int = 4  # flag changes of a Gauss point in an increment before freezing
+    on_snap_back: str = "stop"  # stop | continue (accept the drop, recorded per step)
 
 
 def solver_settings(deck: Deck) -> SolverSettings:
@@ -27,4 +30,6 @@ def solver_settings(deck: Deck) -> SolverSettings:
         max_iterations=a.max_iterations, max_step_cuts=a.max_step_cuts,
         stiffness_update=a.stiffness_update, increment=c.increment, target=c.target,
         preload_increments=a.preload_increments,
-        reset_slip_each_step=deck.materials.interface.reset_slip_each_step)
+        reset_slip_each_step=deck.materials.interface.reset_slip_each_step,
+        acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
+        on_snap_back=a.on_snap_back)

@@ -65,7 +65,7 @@ def bar_problem(length: float, n_el: int, E=30000.0, strength=3.0, weak=0.9,
     R[dofs.equations(left, 0)] = -0.5  # total 1 N pulling in -x
     control = int(dofs.equations(left[:1], 0)[0])
     problem = Problem(structure, SupportConstraints(dofs.n_equations, fixed), R, None, control,
-                      lambda states: np.concatenate([s > strengths / E for s in states]))
+                      lambda states: tuple((s > strengths / E)[:, None] for s in states))
     initial = PathState(np.zeros(dofs.n_equations), 0.0, structure.initial_states())
     return problem, initial
 
