@@ -135,14 +135,14 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     slack = LOADING_TOLERANCE * (state.max_equivalent_uniaxial_strain + np.abs(
         trial).max(axis=1, keepdims=True) / state.secant_modulus)
     loading = magnitude > state.max_equivalent_uniaxial_strain + slack
-    if frozen is not None:  # the solver's chatter damping: these points only unload/reload
-        loading &= ~np.asarray(frozen, dtype=bool)[:, None]
     rows = np.nonzero(sign_change.any(axis=1))[0]
     if rows.size:
         uniaxial_strength = np.where(eps_u[rows] > 0.0, params.ft, -params.fc)
         uniaxial_stress, _ = _envelope(eps_u[rows], uniaxial_strength, np.where(
             eps_u[rows] > 0.0, params.eps_t, -params.eps_c), params, rows)
         loading[rows] |= sign_change[rows] & (secant_line[rows] > uniaxial_stress * (1 + 1e-9))
+    if frozen is not None:  # the solver's chatter damping: these points only unload/reload
+        loading &= ~np.asarray(frozen, dtype=bool)[:, None]
     # on the same branch the secant never grows (damage is irreversible; the thesis is silent):
     # where the surface now gives a larger sigma_ic, load along the current secant instead
     heal = ~sign_change & (envelope_secant > state.secant_modulus)
@@ -174,8 +174,11 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         stress=stress,
         angle=angle,
         equivalent_uniaxial_strain=eps_u,
+        # a frozen point's history does not grow: it loads on from there in the next step
         max_equivalent_uniaxial_strain=np.maximum(state.max_equivalent_uniaxial_strain,
-                                                  magnitude),
+                                                  magnitude if frozen is None else np.where(
+                                                      np.asarray(frozen)[:, None], 0.0,
+                                                      magnitude)),
         secant_modulus=secant_modulus,
         poisson_ratio=poisson_ratio,
         shear_modulus=shear_modulus,
