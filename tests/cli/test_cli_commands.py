@@ -37,7 +37,8 @@ def test_check_ok_and_broken(tmp_path):
 
 def test_run_then_summary(tmp_path):
     out = tmp_path / "cf4.h5"
-    result = invoke("run", str(DECKS / "cf4.yaml"), "-o", str(out), "--quiet")
+    result = invoke("run", str(DECKS / "cf4.yaml"), "-o", str(out), "--quiet",
+                    "--set", "analysis.solver=linear")
     assert result.exit_code == 0, result.output
     assert out.exists()
     assert not Path(str(out) + ".partial").exists()

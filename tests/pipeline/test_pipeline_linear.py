@@ -15,11 +15,12 @@ from icewall.pipeline import run_deck
 from icewall.results.reader import open_result
 
 DECKS = Path(__file__).resolve().parents[2] / "decks"
+LINEAR = ["analysis.solver=linear"]
 
 
 @pytest.fixture(scope="module")
 def cf4_result(tmp_path_factory):
-    loaded = load_deck(DECKS / "cf4.yaml")
+    loaded = load_deck(DECKS / "cf4.yaml", LINEAR)
     report = run_deck(loaded, tmp_path_factory.mktemp("run") / "cf4.h5")
     return loaded, report
 
@@ -68,8 +69,8 @@ def test_stored_stresses_are_in_equilibrium_with_the_loads(cf4_result):
 
 
 def test_outputs_not_asked_for_are_not_written(tmp_path):
-    loaded = load_deck(DECKS / "cf4.yaml", ["outputs.fields=[displacement]",
-                                            "outputs.every=10"])
+    loaded = load_deck(DECKS / "cf4.yaml", LINEAR + ["outputs.fields=[displacement]",
+                                                     "outputs.every=10"])
     report = run_deck(loaded, tmp_path / "cf4.h5")
     with open_result(report.path) as res:
         assert res.steps == [10, 20, 30, 40]
@@ -78,7 +79,7 @@ def test_outputs_not_asked_for_are_not_written(tmp_path):
 
 
 def test_preload_is_held_and_bonded_wall_has_no_pairs(tmp_path):
-    loaded = load_deck(DECKS / "tf1.yaml", ["materials.interface.model=bonded"])
+    loaded = load_deck(DECKS / "tf1.yaml", LINEAR + ["materials.interface.model=bonded"])
     report = run_deck(loaded, tmp_path)
     with open_result(report.path) as res:
         assert len(res.mesh.interface_pairs) == 0
