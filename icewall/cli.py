@@ -113,6 +113,36 @@ def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool) 
 
 
 @main.command()
+@click.argument("decks", nargs=-1, type=click.Path(dir_okay=False))
+@click.option("-f", "--file", "sweep_file", type=click.Path(dir_okay=False), default=None,
+              help="Sweep file (YAML: decks, vary, fixed).")
+@click.option("--set", "overrides", multiple=True,
+              help="key.path=v1,v2,... varies a deck value (cartesian product over several "
+                   "--set; a comma inside [..], {..} or quotes does not split); one value "
+                   "applies to every run.")
+@click.option("-o", "--out", "outdir", default="results/sweep", show_default=True,
+              type=click.Path(file_okay=False), help="Directory for the results and the table.")
+@click.option("-j", "--workers", type=click.IntRange(1), default=None,
+              help="Local worker processes [default: number of CPUs].")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Run on this Dask distributed scheduler (e.g. tcp://host:8786).")
+@click.option("--force", is_flag=True, help="Rerun finished runs too.")
+@click.option("--dry-run", is_flag=True, help="List the runs, run nothing.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
+@_handle_errors
+def sweep(decks: tuple[str, ...], sweep_file: str | None, overrides: tuple[str, ...],
+          outdir: str, workers: int | None, scheduler: str | None, force: bool, dry_run: bool,
+          quiet: bool) -> None:
+    """Run DECKS (and/or a sweep file) over parameter variations, in parallel and resumably;
+    writes one HDF5 per run and OUT/sweep_summary.csv with test/predicted ratios."""
+    from icewall.analysis.sweep import sweep_command
+
+    sys.exit(sweep_command(decks, sweep_file=sweep_file, overrides=overrides, outdir=outdir,
+                           workers=workers, scheduler=scheduler, force=force, quiet=quiet,
+                           dry_run=dry_run))
+
+
+@main.command()
 @click.argument("result", type=click.Path(dir_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @_handle_errors

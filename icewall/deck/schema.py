@@ -130,6 +130,11 @@ class Concrete:
     k_c: float | None = option(None, doc="compressive decay (default eq. 3.34 corrected)",
                                exclusive_minimum=0.0)
     surface: Surface = option(Surface(), doc="ultimate-surface calibration")
+    compression_tension_rule: str = option(
+        "equal", doc="thesis 3.2.5 rule (b): in compression-tension states the compressive "
+        "strength and strain are the uniaxial f'c, eps_c (equal), or at least those (floor: the "
+        "errata's signed reading, under which out-of-plane confinement in plane strain raises "
+        "them again)", choices=("equal", "floor"))
     trial_stress: str = option("total", doc="trial stress of Fig. 3.12 step 3: total = secant "
                                "matrix of the committed moduli times the total strain in the "
                                "new axes; incremental = committed stress rotated into the new "
@@ -273,7 +278,7 @@ class Analysis:
                                               "matrix are kept above this fraction of their "
                                               "initial values (stresses unaffected; 0 = pure "
                                               "secant, the thesis)", minimum=0.0, maximum=1.0)
-    acceleration: str = option("aitken", doc="relaxation of the iteration's corrections: "
+    acceleration: str = option("halving", doc="relaxation of the iteration's corrections: "
                                "aitken (dynamic relaxation from successive corrections), "
                                "halving (halve when the load norm grows) or none (the thesis)",
                                choices=("aitken", "halving", "none"))

@@ -82,6 +82,9 @@ class ConcreteParameters:
     nu_max: float
     surface: WillamWarnkeSurface
     peak_strain_slope: float = 3.0
+    # §3.2.5 rule (b) in compression-tension states: "equal" = the compressive parameters are
+    # the uniaxial f'c, eps_c; "floor" = at least those (errata §3's signed reading)
+    compression_tension_rule: str = "equal"
 
     def __post_init__(self) -> None:
         for name in ("fc", "E0", "ft", "eps_c", "eps_t", "Gf", "G_cr", "h_c", "k_t", "k_c"):
@@ -92,6 +95,8 @@ class ConcreteParameters:
             raise ValueError(f"need 0 <= nu0 < nu_max < 0.5, got {self.nu0}, {self.nu_max}")
         if self.peak_strain_slope < 0.0:
             raise ValueError("peak_strain_slope must be >= 0")
+        if self.compression_tension_rule not in ("equal", "floor"):
+            raise ValueError("compression_tension_rule must be 'equal' or 'floor'")
 
     @property
     def snap_back_tension(self) -> bool:
@@ -106,7 +111,7 @@ class ConcreteParameters:
 
 
 _DEFAULTS = ("E0", "ft", "eps_c", "eps_t", "nu0", "Gf", "alpha", "G_cr", "k_t", "k_c",
-             "nu_max", "surface", "peak_strain_slope")
+             "nu_max", "surface", "peak_strain_slope", "compression_tension_rule")
 _SURFACE_KEYS = ("fcb_ratio", "f1", "f2")
 
 
@@ -162,5 +167,6 @@ def derive_concrete_parameters(fc: float, h_c: float, **overrides: object) -> Co
         fc=float(fc), E0=E0, ft=ft, eps_c=eps_c, eps_t=eps_t, nu0=float(get("nu0", 0.2)),
         Gf=Gf, alpha=alpha, G_cr=G_cr, h_c=float(h_c), k_t=k_t, k_c=k_c,
         nu_max=float(get("nu_max", 0.49)), surface=surface,  # type: ignore[arg-type]
-        peak_strain_slope=float(get("peak_strain_slope", 3.0)))
+        peak_strain_slope=float(get("peak_strain_slope", 3.0)),
+        compression_tension_rule=str(get("compression_tension_rule", "equal")))
 

@@ -315,8 +315,9 @@ def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParamete
 
     sigma_ic = s sigma_i on the proportional ray (§3.2.4), then the §3.2.5 mode rules read
     with signed stresses (errata §3 "Sign convention"): (a) triaxial compression: from the
-    surface; (b) compression-tension: tension from the surface, compression at least f'c in
-    magnitude; (c) all-tension: tension at least f't. Components with |sigma_i| <= zero_tol
+    surface; (b) compression-tension: tension from the surface, compression equal to f'c
+    (params.compression_tension_rule "equal") or at least f'c in magnitude ("floor");
+    (c) all-tension: tension at least f't. Components with |sigma_i| <= zero_tol
     max|sigma| (e.g. sigma3 = 0 in plane stress) and all components of a zero state
     (max|sigma| <= 1e-12 f'c) fall back to the uniaxial values (errata §3, "Using the strength
     surface"): -f'c where ``strain_sign`` (e.g. sign of eps_iu) or else the stress is negative,
@@ -334,7 +335,12 @@ def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParamete
     any_t = tens.any(axis=1, keepdims=True)
     any_c = comp.any(axis=1, keepdims=True)
     out = sic.copy()
-    out = np.where(comp & any_t, np.minimum(sic, -fc), out)  # rule (b)
+    # rule (b): "the compressive strength/strain is set equal to the uniaxial strength/strain
+    # ... if the calculated values from the ultimate surfaces are greater": read in magnitudes
+    # a cap, read signed (errata §3) a floor; "equal" applies both, "floor" the errata's
+    rule_b = (np.full_like(sic, -fc) if params.compression_tension_rule == "equal"
+              else np.minimum(sic, -fc))
+    out = np.where(comp & any_t, rule_b, out)
     out = np.where(tens & ~any_c, np.maximum(sic, ft), out)  # rule (c)
     return np.where(zero, fallback, out)
 

@@ -67,7 +67,8 @@ def concrete_parameters(deck: Deck, h_c: float) -> ConcreteParameters:
     """The deck's concrete with every thesis 4.3.1 default and the deck's overrides."""
     c = deck.materials.concrete
     overrides: dict[str, Any] = {"eps_c": c.eps_c, "nu0": c.nu, "Gf": c.Gf,
-                                 "fcb_ratio": c.surface.biaxial_ratio}
+                                 "fcb_ratio": c.surface.biaxial_ratio,
+                                 "compression_tension_rule": c.compression_tension_rule}
     for deck_key, key in (("E", "E0"), ("ft", "ft"), ("alpha", "alpha"), ("k_t", "k_t"),
                           ("k_c", "k_c")):
         if getattr(c, deck_key) is not None:

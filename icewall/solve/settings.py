@@ -18,7 +18,7 @@ class SolverSettings:
     target: float  # final control displacement, mm
     preload_increments: int  # load-control increments of the in-plane preload
     reset_slip_each_step: bool  # thesis 3.3.4: slipped pairs start each step fixed
-    acceleration: str = "aitken"  # relaxation of the corrections: aitken | halving | none
+    acceleration: str = "halving"  # relaxation of the corrections: halving | aitken | none
     max_flag_changes: int = 4  # flag changes of a Gauss point in an increment before freezing
     on_snap_back: str = "stop"  # stop | continue (accept the drop, recorded per step)
 

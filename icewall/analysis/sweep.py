@@ -1,0 +1,337 @@
+"""`icewall sweep`: many decks and parameter variations, run in parallel and resumably.
+
+Jobs are decks x the cartesian product of the varied values. `--set key.path=v1,v2,v3` varies a
+key (values split at top-level commas: a comma inside [...], {...} or quotes does not split, so
+`--set 'geometry.diaphragms.positions=[450, 750],[300, 750]'` gives two lists and
+`--set 'specimen.description="a, b"'` one string); a `--set` with one value applies to every job
+and is not part of the run name. A sweep file (YAML) holds the same: `decks: [paths relative to
+the file]`, `vary: {key.path: [values]}`, `fixed: {key.path: value}`. A run is named
+`<deck stem>__<key>=<value>...` (varied keys only) and writes `OUTDIR/<name>.h5`.
+
+A run whose final file exists with status completed or stopped, made from the same deck text
+and overrides (stamped in the file's `sweep_overrides` attribute), is skipped unless `force`; a
+`.partial` left by a crash is rerun. Runs go to a local process pool, or with `scheduler` to an
+existing Dask distributed cluster (paths must then be valid on the workers: a shared filesystem).
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import re
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from icewall.errors import DeckError, IcewallError, ResultError
+
+FINISHED = ("completed", "stopped")
+_UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
+_MAX_NAME = 150
+
+
+@dataclass(frozen=True)
+class Job:
+    """One run of a sweep: deck, its overrides (fixed, then varied), name and result file."""
+
+    name: str
+    deck: str
+    overrides: tuple[str, ...]
+    varied: tuple[str, ...]
+    output: str
+
+
+def split_values(raw: str) -> list[str]:
+    """Split `v1,v2,...` at commas outside brackets, braces and quotes."""
+    values, buf, depth, quote, escape = [], [], 0, "", False
+    for ch in raw:
+        if quote:
+            escape = not escape and ch == "\\" and quote == '"'
+            quote = "" if ch == quote and not escape else quote
+        elif ch in "'\"":
+            quote = ch
+        elif ch in "[{":
+            depth += 1
+        elif ch in "]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            values.append("".join(buf).strip())
+            buf = []
+            continue
+        buf.append(ch)
+    values.append("".join(buf).strip())
+    if any(not v for v in values):
+        raise DeckError(f"--set: empty value in {raw!r}", "icewall sweep")
+    return values
+
+
+def _yaml_text(value) -> str:
+    """A sweep-file value as the YAML text of a --set override."""
+    if isinstance(value, str):
+        try:
+            same = yaml.safe_load(value) == value
+        except yaml.YAMLError:
+            same = False
+        return value if same and "\n" not in value else json.dumps(value)
+    return json.dumps(value)
+
+
+def _read_sweep_file(path: str | Path) -> tuple[list[str], dict, dict]:
+    try:
+        data = yaml.safe_load(Path(path).read_text()) or {}
+    except OSError as exc:
+        raise DeckError(f"cannot read the sweep file: {exc.strerror}", str(path)) from None
+    except yaml.YAMLError as exc:
+        raise DeckError(f"YAML syntax error: {exc}", str(path)) from None
+    if not isinstance(data, dict) or set(data) - {"decks", "vary", "fixed"}:
+        raise DeckError("a sweep file is a mapping of decks, vary, fixed", str(path))
+    base = Path(path).parent
+    decks, vary, fixed = data.get("decks") or [], data.get("vary") or {}, data.get("fixed") or {}
+    if not isinstance(decks, list) or not isinstance(vary, dict) or not isinstance(fixed, dict):
+        raise DeckError("decks is a list, vary and fixed are mappings", str(path))
+    vary = {str(k): [_yaml_text(v) for v in (vs if isinstance(vs, list) else [vs])]
+            for k, vs in vary.items()}
+    fixed = {str(k): _yaml_text(v) for k, v in fixed.items()}
+    return [str(base / d) for d in decks], vary, fixed
+
+
+def _run_name(deck: str, varied: Iterable[tuple[str, str]]) -> str:
+    def clean(text: str) -> str:
+        return _UNSAFE.sub("_", text).strip("_") or "_"
+
+    name = "__".join([clean(Path(deck).stem)] + [f"{clean(k)}={clean(v)}" for k, v in varied])
+    if len(name) > _MAX_NAME:
+        import hashlib
+
+        name = name[:_MAX_NAME - 9] + "~" + hashlib.sha1(name.encode()).hexdigest()[:8]
+    return name
+
+
+def expand_jobs(decks: Iterable[str | Path] = (), sets: Iterable[str] = (),
+                sweep_file: str | Path | None = None, outdir: str | Path = "results/sweep"
+                ) -> list[Job]:
+    """Jobs of a sweep: decks (CLI, then the sweep file's) x cartesian product of varied values."""
+    deck_list, vary, fixed = _read_sweep_file(sweep_file) if sweep_file else ([], {}, {})
+    deck_list = [str(d) for d in decks] + deck_list
+    where = str(sweep_file) if sweep_file else "icewall sweep"
+    if both := set(vary) & set(fixed):
+        raise DeckError(f"{', '.join(sorted(both))} both varied and fixed", where)
+    given: set[str] = set()
+    for assignment in sets:  # a --set replaces the sweep file's entry for its key
+        key, sep, raw = assignment.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise DeckError(f"--set expects key.path=value[,value...], got {assignment!r}", where)
+        if key in given:
+            raise DeckError(f"--set: {key} is given twice", where)
+        given.add(key)
+        vary.pop(key, None)
+        fixed.pop(key, None)
+        values = split_values(raw)
+        if len(values) == 1:
+            fixed[key] = values[0]
+        else:
+            vary[key] = values
+    if not deck_list:
+        raise DeckError("no decks to run", where)
+    fixed_over = tuple(f"{k}={v}" for k, v in fixed.items())
+    jobs: dict[str, Job] = {}
+    for deck in deck_list:
+        for combo in itertools.product(*([(k, v) for v in vs] for k, vs in vary.items())):
+            name = _run_name(deck, combo)
+            varied = tuple(f"{k}={v}" for k, v in combo)
+            job = Job(name, deck, fixed_over + varied, varied, str(Path(outdir) / f"{name}.h5"))
+            if name in jobs and jobs[name] != job:
+                raise DeckError(f"two runs would share the name {name} "
+                                f"({jobs[name].deck}, {deck}): rename one deck", where)
+            jobs[name] = job
+    return list(jobs.values())
+
+
+def finished_status(job: Job) -> str | None:
+    """Status of an earlier run of `job` that can be skipped (completed/stopped), else None."""
+    from icewall.results.reader import open_result
+
+    if not os.path.exists(job.output):
+        return None
+    try:
+        with open_result(job.output) as res:
+            status, stamp, text = res.status, res.attrs.get("sweep_overrides"), res.deck_text
+        same_deck = Path(job.deck).read_text() == text
+    except (ResultError, OSError, UnicodeDecodeError):
+        return None
+    if not same_deck or (stamp is not None and json.loads(stamp) != list(job.overrides)):
+        return None  # the deck was edited since, or the run was made with other overrides
+    return status if status in FINISHED else None
+
+
+def run_job(job: Job) -> dict:
+    """Run one job (in a worker); never raises: a failure is a result with status failed."""
+    start = time.perf_counter()
+    out = {"name": job.name, "path": job.output, "status": "failed", "reason": "",
+           "run_time_s": 0.0, "n_steps": 0}
+    try:
+        import h5py
+
+        from icewall.deck.load import load_deck
+        from icewall.pipeline import run_deck
+
+        if os.path.exists(job.output):  # a rerun: no stale result if this one fails
+            os.remove(job.output)
+        loaded = load_deck(job.deck, job.overrides)
+        report = run_deck(loaded, job.output, progress=None)
+        if report.status in FINISHED:
+            with h5py.File(report.path, "a") as f:
+                f.attrs["sweep_overrides"] = json.dumps(list(job.overrides))
+        out.update(path=report.path, status=report.status, reason=report.reason,
+                   n_steps=report.n_steps)
+    except IcewallError as exc:
+        out["reason"] = str(exc)
+    except Exception as exc:  # noqa: BLE001 - any failure is this job's, the sweep goes on
+        out["reason"] = f"{type(exc).__name__}: {exc}"
+    out["run_time_s"] = time.perf_counter() - start
+    return out
+
+
+def _failed(job: Job, reason: str) -> dict:
+    return {"name": job.name, "path": job.output, "status": "failed", "reason": reason,
+            "run_time_s": 0.0, "n_steps": 0}
+
+
+def _pool(workers: int):
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    methods = multiprocessing.get_all_start_methods()
+    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    if ctx.get_start_method() == "forkserver":
+        ctx.set_forkserver_preload(["icewall.pipeline"])
+    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+
+
+def run_local(jobs: list[Job], workers: int, done: Callable[[dict], None],
+              runner: Callable[[Job], dict] = run_job) -> None:
+    """Run `jobs` in a process pool; `done(result)` as each finishes. A worker that dies breaks
+    the pool and fails every job not yet done; each of those is rerun in a pool of its own (as
+    many at a time as `workers`), so that only the culprit fails."""
+    from concurrent.futures import as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    suspects: list[Job] = []
+    with _pool(max(1, min(workers, len(jobs)))) as pool:
+        futures = {pool.submit(runner, job): job for job in jobs}
+        try:
+            for future in as_completed(futures):
+                try:
+                    done(future.result())
+                except BrokenProcessPool:
+                    suspects.append(futures[future])
+                except Exception as exc:  # noqa: BLE001
+                    done(_failed(futures[future], f"{type(exc).__name__}: {exc}"))
+        except BaseException:  # Ctrl-C: start no more runs
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+    if suspects:
+        from concurrent.futures import ThreadPoolExecutor
+
+        def alone(job: Job) -> dict:
+            with _pool(1) as pool:
+                try:
+                    return pool.submit(runner, job).result()
+                except BrokenProcessPool:
+                    return _failed(job, "the worker process died (crash or out of memory)")
+
+        with ThreadPoolExecutor(max(1, min(workers, len(suspects)))) as threads:
+            for future in as_completed([threads.submit(alone, job) for job in suspects]):
+                done(future.result())
+
+
+def run_dask(jobs: list[Job], address: str, done: Callable[[dict], None],
+             runner: Callable[[Job], dict] = run_job) -> None:
+    """Submit `jobs` to the Dask scheduler at `address`; `done(result)` as each finishes."""
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError:
+        raise IcewallError("--scheduler needs Dask: pip install 'icewall[cluster]'") from None
+    absolute = [Job(j.name, os.path.abspath(j.deck), j.overrides, j.varied,
+                    os.path.abspath(j.output)) for j in jobs]
+    try:
+        client = Client(address, timeout="20s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise IcewallError(f"cannot connect to the Dask scheduler {address}: {exc}") from None
+    with client:
+        futures = {client.submit(runner, job, key=f"icewall-sweep-{job.name}-{time.time_ns()}",
+                                 pure=False): job for job in absolute}
+        try:
+            for future in as_completed(futures):
+                try:
+                    done(future.result())
+                except Exception as exc:  # noqa: BLE001 - KilledWorker, lost worker, ...
+                    done(_failed(futures[future], f"{type(exc).__name__}: {exc}"))
+        except BaseException:  # Ctrl-C: withdraw what has not run
+            client.cancel(list(futures))
+            raise
+
+
+def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
+                  overrides: Iterable[str] = (), outdir: str = "results/sweep",
+                  workers: int | None = None, scheduler: str | None = None,
+                  force: bool = False, quiet: bool = False, dry_run: bool = False,
+                  echo: Callable[[str], None] | None = None) -> int:
+    """Body of `icewall sweep`; returns the exit status (0: every run completed, 1: not).
+
+    CLI: `icewall sweep [DECK]... [-f/--file SWEEP.yaml] [--set key.path=v1,v2 ...]
+    [-o/--out OUTDIR (results/sweep)] [-j/--workers N (os.cpu_count())] [--scheduler ADDRESS]
+    [--force] [--dry-run] [-q/--quiet]`. Deck errors raise DeckError (exit 2) before any run.
+    """
+    from icewall.analysis.sweep_table import build_rows, format_table, ratio_stats, write_csv
+
+    if echo is None:
+        import click
+
+        echo = click.echo
+    say = (lambda text: None) if quiet else echo
+    jobs = expand_jobs(decks, overrides, sweep_file, outdir)
+    if dry_run:
+        for job in jobs:
+            echo(f"{job.name}  {job.deck}  {' '.join(job.overrides)}  -> {job.output}")
+        return 0
+    try:
+        os.makedirs(outdir, exist_ok=True)
+    except OSError as exc:
+        raise ResultError(f"cannot create the output directory {outdir}: {exc}") from None
+    results: dict[str, dict] = {}
+    todo = []
+    width = max(len(job.name) for job in jobs)
+    for job in jobs:
+        status = None if force else finished_status(job)
+        if status is None:
+            todo.append(job)
+            continue
+        results[job.name] = {"name": job.name, "path": job.output, "status": status}
+        say(f"[{len(results)}/{len(jobs)}] {job.name:<{width}}  skipped ({status} earlier)")
+
+    def done(result: dict) -> None:
+        results[result["name"]] = result
+        why = result["reason"]
+        reason = f"  ({why[:77] + '...' if len(why) > 80 else why})" if why else ""
+        say(f"[{len(results)}/{len(jobs)}] {result['name']:<{width}}  {result['status']:<9}"
+            f"  {result['run_time_s']:.1f} s{reason}")
+
+    start = time.perf_counter()
+    if todo and scheduler:
+        run_dask(todo, scheduler, done)
+    elif todo:
+        run_local(todo, workers or os.cpu_count() or 1, done)
+    rows = build_rows(jobs, results)
+    stats = ratio_stats(rows)
+    table = os.path.join(outdir, "sweep_summary.csv")
+    write_csv(table, rows, stats)
+    echo(format_table(rows, stats))
+    say(f"{len(todo)} run(s) in {time.perf_counter() - start:.1f} s, "
+        f"{len(jobs) - len(todo)} skipped; table: {table}")
+    return 0 if all(r["status"] == "completed" for r in rows) else 1

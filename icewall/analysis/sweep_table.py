@@ -1,0 +1,160 @@
+"""The summary table of a sweep: one row per run, with test/predicted ratios.
+
+A ratio is reference / ours (test/predicted, as in the thesis' Table 5.1), against the test and
+against the thesis' FEA, for the ultimate (peak) load and the residual load at 40 mm, both as
+icewall.analysis.extract defines them (`peaked` is "no" where the load had not dropped by the
+end of the run: the peak is then a lower bound). Reference values come from
+icewall.analysis.reference where it knows the specimen, else from the deck's
+`specimen.reference`. Below the rows: the mean and the coefficient of variation (sample
+standard deviation / mean) of each ratio column over the rows that have a value.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+
+import numpy as np
+
+RESIDUAL_AT = 40.0  # mm
+RATIOS = {  # column -> (reference field, our measure)
+    "ult_test/pred": ("ultimate_test", "peak"),
+    "ult_thesis/pred": ("ultimate_thesis", "peak"),
+    "res_test/pred": ("residual_test", "residual_40"),
+    "res_thesis/pred": ("residual_thesis", "residual_40"),
+}
+COLUMNS = ("name", "specimen", "overrides", "status", "peak", "peak_deflection", "peaked",
+           "residual_40", "unit", "n_steps", "run_time_s", *RATIOS, "reason")
+_HEADERS = {"peak_deflection": "defl@peak", "residual_40": "res@40mm", "run_time_s": "time_s",
+            "n_steps": "steps"}
+_SCALE = {"N": 1.0, "kN": 1e3, "MN": 1e6, "MPa": 1.0, "N/mm2": 1.0}
+
+
+def _measures(path: str) -> dict:
+    """Peak load, its deflection and the residual load at 40 mm of one result file, as the
+    shared extractor (icewall.analysis.extract) defines them."""
+    from icewall.analysis.extract import extract
+    from icewall.results.reader import open_result
+
+    with open_result(path) as res:
+        attrs = res.attrs
+    fig = extract(path, residual_deflection=RESIDUAL_AT)
+    return {"specimen": attrs.get("specimen"), "status": attrs.get("status"),
+            "reason": attrs.get("stop_reason", ""), "unit": attrs.get("load_unit"),
+            "n_steps": attrs.get("n_steps"), "run_time_s": attrs.get("run_time_s"),
+            "peak": fig.get("peak_load"), "peak_deflection": fig.get("deflection_at_peak"),
+            "peaked": {True: "yes", False: "no"}.get(fig.get("peaked")),
+            "residual_40": fig.get("residual_load_40")}
+
+
+def _references(job, specimen: str | None) -> tuple[dict, str | None]:
+    """Reference values of a job's specimen and their unit (None: the deck's load unit)."""
+    try:
+        from icewall.analysis import reference
+    except ImportError:
+        reference = None
+    if reference is not None and specimen:
+        find = getattr(reference, "find_reference", None)
+        ref = find(specimen) if find else reference.load_reference().get(specimen)
+        if ref is not None:
+            return ({k: getattr(ref, k, None) for k, _ in RATIOS.values()},
+                    getattr(ref, "unit", None))
+    try:
+        from icewall.deck.load import load_deck
+
+        ref = load_deck(job.deck, job.overrides).deck.specimen.reference
+    except Exception:  # noqa: BLE001 - a broken deck has no reference values
+        return {}, None
+    return {k: getattr(ref, k) for k, _ in RATIOS.values()}, None
+
+
+def _ratio(reference, ours, ref_unit, our_unit) -> float | None:
+    if reference is None or ours is None or ours <= 0.0:
+        return None
+    if ref_unit and our_unit and ref_unit != our_unit:
+        if ref_unit not in _SCALE or our_unit not in _SCALE or \
+                (ref_unit == "MPa") != (our_unit == "MPa"):
+            return None
+        reference = reference * _SCALE[ref_unit] / _SCALE[our_unit]
+    return float(reference) / ours
+
+
+def build_rows(jobs, results: dict[str, dict]) -> list[dict]:
+    """One row per job; `results[name]` is the run's result dict (or the skipped run's)."""
+    rows = []
+    for job in jobs:
+        result = results.get(job.name, {})
+        row = dict.fromkeys(COLUMNS)
+        row.update(name=job.name, overrides=" ".join(job.varied), status=result.get("status"),
+                   reason=result.get("reason"), run_time_s=result.get("run_time_s"),
+                   n_steps=result.get("n_steps"))
+        path = result.get("path") or job.output
+        if os.path.exists(path):
+            try:
+                measures = _measures(path)
+            except Exception as exc:  # noqa: BLE001
+                measures = {"reason": f"unreadable result: {exc}"}
+            row.update({k: v for k, v in measures.items() if row.get(k) is None})
+        refs, ref_unit = _references(job, row["specimen"])
+        for column, (field, measure) in RATIOS.items():
+            row[column] = _ratio(refs.get(field), row[measure], ref_unit, row["unit"])
+        rows.append(row)
+    return rows
+
+
+def ratio_stats(rows: list[dict]) -> dict[str, tuple[float | None, float | None, int]]:
+    """Per ratio column: (mean, coefficient of variation, number of rows with a value)."""
+    stats = {}
+    for column in RATIOS:
+        values = np.array([r[column] for r in rows if r[column] is not None], dtype=float)
+        mean = float(values.mean()) if len(values) else None
+        cov = float(values.std(ddof=1) / mean) if len(values) > 1 and mean else None
+        stats[column] = (mean, cov, len(values))
+    return stats
+
+
+def _text(value, column: str) -> str:
+    if value is None and column not in RATIOS:
+        return ""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.3f}" if column in RATIOS or column == "run_time_s" else f"{value:.5g}"
+    return str(value)
+
+
+def _stat_rows(stats) -> list[dict]:
+    mean = {"name": "mean", **{c: s[0] for c, s in stats.items()}}
+    cov = {"name": "cov", **{c: s[1] for c, s in stats.items()}}
+    return [mean, cov]
+
+
+def write_csv(path: str | os.PathLike, rows: list[dict], stats) -> None:
+    """Rows, then a `mean` and a `cov` row (ratio columns only); empty cells for no value."""
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=COLUMNS)
+        writer.writeheader()
+        for row in rows + _stat_rows(stats):
+            writer.writerow({c: "" if row.get(c) is None else row.get(c) for c in COLUMNS})
+
+
+def format_table(rows: list[dict], stats) -> str:
+    """Aligned text table (without the reason column; failures are listed under it)."""
+    columns = [c for c in COLUMNS if c != "reason"]
+    body = [[_text(r.get(c), c) or ("-" if r in rows else "") for c in columns]
+            for r in rows + _stat_rows(stats)]
+    head = [_HEADERS.get(c, c) for c in columns]
+    widths = [max(len(x) for x in col) for col in zip(head, *body, strict=True)]
+    numeric = {"peak", "peak_deflection", "residual_40", "n_steps", "run_time_s", *RATIOS}
+
+    def line(cells):
+        return "  ".join(x.rjust(w) if c in numeric else x.ljust(w)
+                         for x, w, c in zip(cells, widths, columns, strict=True)).rstrip()
+
+    out = [line(head), line(["-" * w for w in widths])]
+    out += [line(cells) for cells in body[:len(rows)]]
+    out += [line(["-" * w for w in widths])] + [line(cells) for cells in body[len(rows):]]
+    out += [f"{r['name']}: {r['status']}: {r['reason']}" for r in rows
+            if r.get("status") != "completed" and r.get("reason")]
+    return "\n".join(out)
