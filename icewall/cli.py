@@ -10,16 +10,28 @@ from pathlib import Path
 import click
 
 from icewall import __version__
-from icewall.errors import IcewallError
+from icewall.errors import IcewallError, Interrupted
 
 SET_HELP = "Override a deck value, e.g. --set materials.concrete.fc=40 (repeatable)."
 
 
+def _raise_interrupted(signum, frame) -> None:
+    import signal
+
+    name = signal.Signals(signum).name
+    raise Interrupted(name, 128 + signum)
+
+
 def _handle_errors(func):
-    """Report IcewallError as one line on stderr with its exit code; no traceback."""
+    """Report IcewallError as one line on stderr with its exit code; no traceback. SIGINT and
+    SIGTERM become Interrupted, so a run's writer records the reason and keeps its steps."""
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
+        import signal
+
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, _raise_interrupted)
         try:
             return func(*args, **kwargs)
         except IcewallError as exc:

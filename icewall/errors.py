@@ -40,3 +40,11 @@ class ConvergenceError(IcewallError):
     def __init__(self, message: str, reason: str = "non-convergence") -> None:
         self.reason = reason
         super().__init__(message)
+
+
+class Interrupted(IcewallError):
+    """The run was stopped by a signal (SIGINT, SIGTERM); finished steps are kept."""
+
+    def __init__(self, signal_name: str, exit_code: int) -> None:
+        self.exit_code = exit_code
+        super().__init__(f"interrupted by {signal_name}")

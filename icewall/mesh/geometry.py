@@ -17,8 +17,12 @@ def mesh_layout(layout: Layout, cell_type: str, model_name: str = "wall",
     Nodes are shared between blocks (conforming); interfaces are split afterwards.
     If `msh_path` is given, gmsh also writes its own (conforming) mesh there.
     """
+    import signal
+    import threading
+
     import gmsh
 
+    handlers = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
     initialized_here = not gmsh.isInitialized()
     if initialized_here:
         gmsh.initialize(interruptible=False)
@@ -44,6 +48,10 @@ def mesh_layout(layout: Layout, cell_type: str, model_name: str = "wall",
             gmsh.finalize()
         else:
             gmsh.model.remove()
+        if threading.current_thread() is threading.main_thread():
+            for signum, handler in handlers.items():  # gmsh installs its own handlers
+                if handler is not None:
+                    signal.signal(signum, handler)
 
 
 def _build_geometry(gmsh, layout: Layout, region_names: list[str]) -> dict[int, str]:
