@@ -112,11 +112,14 @@ def _chatter(problem: Problem, settings: SolverSettings, states, flags_before, c
 
 
 def _relaxation(kind: str, iteration: int, relaxation: float, correction: np.ndarray,
-                previous: np.ndarray | None, load_norm: float, previous_load_norm: float) -> float:
+                previous: np.ndarray | None, load_norm: float, previous_load_norm: float,
+                growth_limit: float = 1.0) -> float:
     """Relaxation of this iteration's correction (the secant iteration is a fixed-point
     iteration): Aitken's dynamic relaxation from two successive corrections, or halving when
-    the load norm grew. Both damp the limit cycles of Gauss points that switch between
-    loading and unloading every iteration; iteration 1 (the predictor) is never relaxed."""
+    the load norm grew and growing by half (up to `growth_limit`, which may over-relax the
+    slow drift of a softening structure) while it falls. Both damp the limit cycles of Gauss
+    points that switch between loading and unloading every iteration; iteration 1 (the
+    predictor) is never relaxed."""
     if kind == "none" or iteration < 3 or previous is None:
         return 1.0
     if kind == "aitken":
@@ -128,7 +131,7 @@ def _relaxation(kind: str, iteration: int, relaxation: float, correction: np.nda
         return float(np.clip(omega, MIN_RELAXATION, MAX_RELAXATION))
     if load_norm > previous_load_norm:
         return max(MIN_RELAXATION, 0.5 * relaxation)
-    return min(1.0, 1.5 * relaxation)
+    return min(growth_limit, 1.5 * relaxation)
 
 
 def _external_force_norm(constraints, applied: np.ndarray, internal: np.ndarray) -> float:
@@ -201,7 +204,8 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
         if not (np.all(np.isfinite(du)) and math.isfinite(dP)):
             raise StepFailed("non-finite displacement correction", "NaN")
         relaxation = _relaxation(settings.acceleration, iteration, relaxation, du,
-                                 previous_correction, load_norm, previous_load_norm)
+                                 previous_correction, load_norm, previous_load_norm,
+                                 settings.max_relaxation)
         previous_correction, previous_load_norm = du, load_norm
         # (multipliers are not relaxed: prescribed ones, e.g. zero on open pairs, stay exact)
         du, dP = relaxation * du, relaxation * dP

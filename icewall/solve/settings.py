@@ -21,6 +21,7 @@ class SolverSettings:
     acceleration: str = "halving"  # relaxation of the corrections: halving | aitken | none
     max_flag_changes: int = 4  # flag changes of a Gauss point in an increment before freezing
     on_snap_back: str = "stop"  # stop | continue (accept the drop, recorded per step)
+    max_relaxation: float = 1.5  # largest relaxation factor of the halving scheme
 
 
 def solver_settings(deck: Deck) -> SolverSettings:
@@ -32,4 +33,4 @@ def solver_settings(deck: Deck) -> SolverSettings:
         preload_increments=a.preload_increments,
         reset_slip_each_step=deck.materials.interface.reset_slip_each_step,
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
-        on_snap_back=a.on_snap_back)
+        on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation)
