@@ -9,7 +9,6 @@ gives the same mesh.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -166,8 +165,3 @@ def _add_node_lines(lines: np.ndarray, points, size: float, element: str) -> np.
         if abs(position - round(position)) > 1e-6:
             lines = _unique([*lines, x])
     return lines
-
-
-def gauss_spacing_estimate(length: float, size: float, n_gauss: int) -> float:
-    """Element length / n_gauss for an interval of `length` meshed at `size` (eq. 4.3 input)."""
-    return length / max(1, math.ceil(length / size - 1e-9)) / n_gauss

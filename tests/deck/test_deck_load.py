@@ -56,3 +56,14 @@ def test_sequences_become_tuples_and_decks_are_frozen():
     assert isinstance(deck.loads.patches.positions, tuple)
     with pytest.raises(AttributeError):
         deck.geometry.depth = 1.0  # type: ignore[misc]
+
+
+def test_deck_text_from_a_result_file_loads_the_same_deck():
+    from icewall.deck.load import load_deck_text
+
+    loaded = load_deck(DECKS / "cf4.yaml")
+    again = load_deck_text(loaded.text, "result:/deck", ["analysis.gauss=2"])
+    assert again.deck.geometry == loaded.deck.geometry
+    assert again.deck.analysis.gauss == 2
+    with pytest.raises(DeckError, match="result:/deck"):
+        load_deck_text(loaded.text.replace("fc: 53.5", "fc: -1"), "result:/deck")
