@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -65,7 +66,8 @@ def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
     attrs = {"specimen": deck.specimen.name, "formulation": deck.analysis.formulation,
              "gauss_order": deck.analysis.gauss, "solver": deck.analysis.solver,
              "load_measure": model.measure_name, "load_unit": model.measure_unit,
-             "icewall_version": __version__}
+             "icewall_version": __version__,
+             "deck_overrides": json.dumps(list(loaded.overrides))}
     writer = ResultWriter(path, deck_text=loaded.text, deck_path=loaded.path, mesh=mesh,
                           attrs=attrs)
     with writer:

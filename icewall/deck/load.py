@@ -25,6 +25,7 @@ class LoadedDeck:
     text: str
     path: str
     tree: LineDict
+    overrides: tuple[str, ...] = ()  # the --set assignments applied on top of `text`
 
     def line_of(self, key_path: str) -> int | None:
         return line_of(self.tree, key_path)
@@ -89,6 +90,6 @@ def _finish(text: str, tree: LineDict, file: str, overrides) -> LoadedDeck:
     for assignment in overrides:
         apply_override(tree, assignment, file)
     deck = build(Deck, tree, Context(file))
-    loaded = LoadedDeck(deck=deck, text=text, path=file, tree=tree)
+    loaded = LoadedDeck(deck=deck, text=text, path=file, tree=tree, overrides=tuple(overrides))
     validate(loaded.deck, lambda message, key: DeckError(message, file, loaded.line_of(key), key))
     return loaded

@@ -32,6 +32,7 @@ def test_result_file_layout(cf4_result):
         assert res.attrs["units"] == "N, mm, MPa"
         assert res.attrs["load_measure"] == "w"
         assert res.deck_text == loaded.text
+        assert res.attrs["deck_overrides"] == '["analysis.solver=linear"]'
         assert res.steps == list(range(1, 41))
         assert res.mesh.n_nodes == report.n_nodes
         assert set(res.gauss_fields(1)) == {"stress", "strain"}
