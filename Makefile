@@ -24,8 +24,11 @@ test: $(STAMP)  ## the default test suite (fast; no long validation runs)
 lint: $(STAMP)
 	$(BIN)/ruff check icewall tests benchmarks
 
-validate: $(STAMP)  ## long validation runs (marked slow)
-	$(BIN)/python -m pytest -q -m slow
+ANALYSED := cf4 cf5 cf8 cf13 tf1 tf2 tf4 vtt3
+BLIND := cf6 cf7 cf14 tf3 tf5 tf6 tf7 vtt1 vtt2 vtt4
+
+validate: $(STAMP)  ## all specimen decks at full resolution (long): results/validation
+	$(BIN)/icewall sweep $(foreach d,$(ANALYSED) $(BLIND),decks/$(d).yaml) -o results/validation
 
 bench: $(STAMP)  ## benchmarks, outside the test suite
 	$(BIN)/python benchmarks/bench_concrete.py
