@@ -21,7 +21,7 @@ class SolverSettings:
     acceleration: str = "halving"  # relaxation of the corrections: halving | aitken | none
     max_flag_changes: int = 4  # flag changes of a Gauss point in an increment before freezing
     on_snap_back: str = "stop"  # stop | continue (accept the drop, recorded per step)
-    max_relaxation: float = 1.5  # largest relaxation factor of the halving scheme
+    max_relaxation: float = 1.0  # largest relaxation factor of the halving scheme
 
 
 def solver_settings(deck: Deck) -> SolverSettings:

@@ -1,0 +1,515 @@
+"""`icewall compare`: check a set of results against a stored baseline (issue 5 §4).
+
+A *baseline* is a YAML file with a header and one entry per run (the result file's stem, as
+`icewall sweep` names it)::
+
+    # comment lines: what produced the file and what the numbers are
+    icewall_version: 0.1.0
+    date: 2026-11-23T06:10:00+00:00
+    command: python -m icewall.analysis.compare --update
+    note: icewall's own regression values, not validation data
+    tolerances: {peak: 0.03, residual: 0.10, ratio_band: [0.6, 1.2]}
+    ratio: {name: ult_test/pred, mean: 0.75, n: 8}
+    runs:
+      cf4:
+        specimen: CF-4
+        deck: decks/cf4.yaml
+        overrides: [loads.control.target=16, ...]
+        status: completed | stopped
+        stop_reason: ''
+        unit: MPa                    # the run's load measure: w in MPa (CF), total load in N
+        peak_load: 5.53              # largest load of the control stage (extract.py)
+        deflection_at_peak: 14.0     # mm
+        peaked: false                # the load had dropped by the end of the run
+        final_deflection: 14.0       # mm, last converged step
+        residual_deflection: 16.0    # mm, the run's target deflection (loads.control.target)
+        residual_load: null          # load at residual_deflection; null: the run stopped short
+
+The residual is the load at the run's own target deflection, not at 40 mm: the coarse CI
+variants stop at 16 mm. Every value is as :func:`icewall.analysis.extract.extract` defines it.
+
+:func:`compare` fails a run when its peak load moves by more than ``peak_tol`` (relative), when
+its residual load moves by more than ``residual_tol`` (looser: post-peak loads are
+path-sensitive -- where the softening localises, which crack opens first, a cut increment,
+can shift the descending branch by several per cent with no change to the model, while the
+peak is a stable figure), when its status changes (a run that completed now stops, or one that
+stopped now completes: either way the baseline no longer describes the code), when its
+overrides differ from the baseline's, or when it is missing. Over the runs whose specimen has a
+test value, the mean test/predicted ratio of the ultimate load must lie in ``ratio_band``.
+Runs absent from the baseline are reported ("new") but do not fail.
+
+:data:`COARSE_VARIANTS` are the CI's coarse variants of the eight analysed decks and
+:func:`run_ci_comparison` runs them (local process pool, resumable as `icewall sweep`) and
+compares them with ``tests/compare/baseline_coarse.yaml``. Regenerate that file, after a
+deliberate change of the results, with ``python -m icewall.analysis.compare --update``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import textwrap
+import time
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from datetime import datetime
+from pathlib import Path
+
+import yaml
+
+from icewall.errors import IcewallError, ResultError
+
+PEAK_TOL = 0.03
+RESIDUAL_TOL = 0.10
+RATIO_BAND = (0.93, 1.07)  # issue 5 acceptance: mean test/predicted of the ultimate load
+RATIO_NAME = "ult_test/pred"
+# The CI band of the coarse variants (written to the header of a new coarse baseline). Today's
+# coarse mean is 0.74, outside the acceptance band: the TF walls are over-predicted two to three
+# times. The floor sits just under that, so that a change which makes the agreement with the
+# tests worse fails even after --update has reset the per-run values; the ceiling leaves room
+# for the fix. The acceptance band (RATIO_BAND) is for the full-resolution `make validate`.
+CI_RATIO_BAND = (0.70, 1.10)
+NOTE = ("icewall's own regression values (what the code computed when the file was written), "
+        "not validation data: the test values are in icewall/analysis/reference_data.yaml")
+
+DECKS_DIR = Path(__file__).resolve().parents[2] / "decks"
+BASELINE_COARSE = Path(__file__).resolve().parents[2] / "tests" / "compare" / \
+    "baseline_coarse.yaml"
+# Coarse CI variants of the eight analysed decks: 2 mm instead of 1 mm increments, the run
+# ended at 16 mm instead of 40 mm, no field output (history only). Each traces its peak within
+# that range; CF-8's load still rises at 16 mm, so it runs to 30 mm (it snaps back at 26 mm).
+# CF-4, CF-8, CF-13 and TF-2 stop at a snap-back the displacement control cannot follow (also
+# with the increment cut to 1/16): that is what the code does today, recorded as it is.
+_COARSE = ("loads.control.increment=2", "outputs.fields=[]")
+COARSE_VARIANTS: dict[str, tuple[str, ...]] = {
+    "cf4": ("loads.control.target=16", *_COARSE),
+    "cf5": ("loads.control.target=16", *_COARSE),
+    "cf8": ("loads.control.target=30", *_COARSE),
+    "cf13": ("loads.control.target=16", *_COARSE),
+    "tf1": ("loads.control.target=16", *_COARSE),
+    "tf2": ("loads.control.target=16", *_COARSE),
+    "tf4": ("loads.control.target=16", *_COARSE),
+    "vtt3": ("loads.control.target=16", *_COARSE),
+}
+_RECORD_KEYS = ("specimen", "deck", "overrides", "status", "stop_reason", "unit", "peak_load",
+                "deflection_at_peak", "peaked", "final_deflection", "residual_deflection",
+                "residual_load")
+
+
+# -- measuring results -------------------------------------------------------------------------
+def _round(value):
+    if isinstance(value, float) and math.isfinite(value):
+        return float(f"{value:.6g}")
+    return value
+
+
+def measure(path: str | os.PathLike) -> dict:
+    """The baseline record of one result file (keys: see the module docstring)."""
+    import h5py
+
+    from icewall.analysis.extract import extract
+    from icewall.deck.load import load_deck_text
+    from icewall.results.reader import open_result
+
+    with open_result(path) as res:
+        attrs, text, status = res.attrs, res.deck_text, res.status
+    with h5py.File(path, "r") as f:
+        deck_path = f["deck"].attrs.get("path", "")
+    deck_path = deck_path.decode() if isinstance(deck_path, bytes) else str(deck_path)
+    overrides = json.loads(attrs.get("deck_overrides") or attrs.get("sweep_overrides") or "[]")
+    try:
+        target = float(load_deck_text(text, deck_path or "<deck>", overrides)
+                       .deck.loads.control.target)
+    except IcewallError:
+        target = None
+    fig = extract(path, residual_deflection=target if target is not None else 40.0)
+    if deck_path:  # a shipped deck is written relative to the repository (decks/cf4.yaml)
+        try:
+            deck_path = Path(deck_path).resolve().relative_to(DECKS_DIR.parent).as_posix()
+        except ValueError:
+            pass
+    record = {
+        "specimen": attrs.get("specimen"), "deck": deck_path, "overrides": list(overrides),
+        "status": status, "stop_reason": attrs.get("stop_reason", ""),
+        "unit": attrs.get("load_unit"), "peak_load": fig.get("peak_load"),
+        "deflection_at_peak": fig.get("deflection_at_peak"), "peaked": fig.get("peaked"),
+        "final_deflection": fig.get("final_deflection"),
+        "residual_deflection": target,
+        "residual_load": fig.get("residual_load_40") if target is not None else None,
+    }
+    return {k: _round(v) for k, v in record.items()}
+
+
+def _result_paths(results) -> list[Path]:
+    if isinstance(results, str | os.PathLike):
+        folder = Path(results)
+        if not folder.is_dir():
+            raise ResultError(f"results directory {folder} not found")
+        return sorted(folder.glob("*.h5"))
+    return [Path(p) for p in results]
+
+
+def measure_results(results) -> dict[str, dict]:
+    """Run name (file stem) -> record, for a sweep output directory, a list of .h5 files or an
+    already measured mapping {name: record} (returned as it is)."""
+    if isinstance(results, Mapping):
+        return {str(k): dict(v) for k, v in results.items()}
+    return {p.stem: measure(p) for p in _result_paths(results)}
+
+
+# -- the baseline file -------------------------------------------------------------------------
+def read_baseline(path: str | os.PathLike) -> dict:
+    """Read a baseline file (raises ResultError if it is missing or malformed)."""
+    try:
+        data = yaml.safe_load(Path(path).read_text())
+    except OSError as exc:
+        raise ResultError(f"cannot read the baseline {path}: {exc.strerror} "
+                          "(write one with --update)") from None
+    except yaml.YAMLError as exc:
+        raise ResultError(f"{path}: YAML syntax error: {exc}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("runs"), dict):
+        raise ResultError(f"{path}: not a baseline file (no 'runs' mapping)")
+    return data
+
+
+def make_baseline(records: Mapping[str, dict], *, command: str, peak_tol: float = PEAK_TOL,
+                  residual_tol: float = RESIDUAL_TOL,
+                  ratio_band: tuple[float, float] = RATIO_BAND) -> dict:
+    """The baseline data (header and runs) of measured records."""
+    from icewall import __version__
+
+    mean, n = mean_ratio(records)
+    return {
+        "icewall_version": __version__,
+        "date": datetime.now().astimezone().isoformat(timespec="seconds"),
+        "command": command,
+        "note": NOTE,
+        "tolerances": {"peak": peak_tol, "residual": residual_tol,
+                       "ratio_band": [float(ratio_band[0]), float(ratio_band[1])]},
+        "ratio": {"name": RATIO_NAME, "mean": _round(mean), "n": n},
+        "runs": {name: {k: records[name].get(k) for k in _RECORD_KEYS}
+                 for name in sorted(records)},
+    }
+
+
+def write_baseline(path: str | os.PathLike, data: dict) -> None:
+    """Write baseline data as YAML with a comment header (atomically)."""
+    head = [
+        "# icewall compare baseline: peak and residual loads per run (units: the run's load",
+        "# measure, w in MPa for CF, total load in N for TF/VTT; deflections in mm).",
+        f"# Written by: {data.get('command')}",
+        *textwrap.wrap(f"{NOTE}.", 94, initial_indent="# ", subsequent_indent="# "),
+        "# residual_load: the load at residual_deflection, the run's final target deflection",
+        "# (loads.control.target); null where the run stopped before it.",
+        "",
+    ]
+    text = "\n".join(head) + yaml.safe_dump(data, sort_keys=False, default_flow_style=None,
+                                            width=100)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+# -- the comparison ----------------------------------------------------------------------------
+def _test_ratio(record: dict) -> float | None:
+    """Test / predicted ultimate load of one record (None: no test value or no peak)."""
+    from icewall.analysis.reference import find_reference
+
+    ref = find_reference(record.get("specimen") or "")
+    peak, unit = record.get("peak_load"), record.get("unit")
+    if ref is None or ref.ultimate_test is None or not peak or peak <= 0:
+        return None
+    if unit and unit != ref.unit:  # reference values are in icewall's measure (MPa or N)
+        return None
+    return ref.ultimate_test / peak
+
+
+def mean_ratio(records: Mapping[str, dict]) -> tuple[float | None, int]:
+    """Mean test/predicted ratio of the ultimate load over the records with a test value."""
+    ratios = [r for r in (_test_ratio(rec) for rec in records.values()) if r is not None]
+    return (sum(ratios) / len(ratios) if ratios else None), len(ratios)
+
+
+@dataclass
+class Row:
+    run: str
+    quantity: str
+    baseline: object
+    now: object
+    change: float | None = None  # relative
+    verdict: str = "ok"  # ok | FAIL | new | info
+    note: str = ""
+
+
+@dataclass
+class CompareReport:
+    rows: list[Row] = field(default_factory=list)
+    peak_tol: float = PEAK_TOL
+    residual_tol: float = RESIDUAL_TOL
+    ratio_band: tuple[float, float] = RATIO_BAND
+    ratio_now: float | None = None
+    ratio_baseline: float | None = None
+    ratio_n: int = 0
+
+    @property
+    def failures(self) -> list[Row]:
+        return [r for r in self.rows if r.verdict == "FAIL"]
+
+    @property
+    def passed(self) -> bool:
+        return not self.failures
+
+
+def _relative(base, now) -> float | None:
+    if base is None or now is None:
+        return None
+    if base == 0:
+        return 0.0 if now == 0 else math.inf
+    return (now - base) / abs(base)
+
+
+def _value_row(run: str, quantity: str, base, now, tol: float) -> Row:
+    change = _relative(base, now)
+    if base is None and now is None:
+        return Row(run, quantity, None, None, None, "ok", "no value (stopped short)")
+    if base is None or now is None:
+        return Row(run, quantity, base, now, None, "FAIL",
+                   "no value now" if now is None else "no baseline value")
+    verdict = "FAIL" if abs(change) > tol else "ok"
+    return Row(run, quantity, base, now, change, verdict,
+               f"moved more than {tol:.0%}" if verdict == "FAIL" else "")
+
+
+def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float = RESIDUAL_TOL,
+            ratio_band: tuple[float, float] = RATIO_BAND) -> CompareReport:
+    """Compare `results` (a sweep output directory, a list of .h5 files, or measured records
+    {name: record}) with `baseline` (a file path or its data). Rules: module docstring."""
+    base = baseline if isinstance(baseline, Mapping) else read_baseline(baseline)
+    base_runs: dict = base.get("runs") or {}
+    now_runs = measure_results(results)
+    lo, hi = float(ratio_band[0]), float(ratio_band[1])
+    report = CompareReport(peak_tol=peak_tol, residual_tol=residual_tol, ratio_band=(lo, hi))
+    for name in sorted(set(base_runs) | set(now_runs)):
+        b, n = base_runs.get(name), now_runs.get(name)
+        if n is None:
+            report.rows.append(Row(name, "run", b.get("status"), None, None, "FAIL",
+                                   "missing from the results"))
+            continue
+        if b is None:
+            report.rows.append(Row(name, "run", None, n.get("status"), None, "new",
+                                   "not in the baseline"))
+            continue
+        if list(b.get("overrides") or []) != list(n.get("overrides") or []):
+            report.rows.append(Row(name, "overrides", " ".join(b.get("overrides") or []),
+                                   " ".join(n.get("overrides") or []), None, "FAIL",
+                                   "made with other overrides than the baseline"))
+        bs, ns = b.get("status"), n.get("status")
+        if bs != ns:
+            why = {("completed", "stopped"): f"now stops: {n.get('stop_reason', '')}",
+                   ("stopped", "completed"): "now completes: update the baseline if intended"}
+            report.rows.append(Row(name, "status", bs, ns, None, "FAIL",
+                                   why.get((bs, ns), f"status {bs} -> {ns}")))
+        else:
+            report.rows.append(Row(name, "status", bs, ns, None, "ok"))
+        report.rows.append(_value_row(name, "peak", b.get("peak_load"), n.get("peak_load"),
+                                      peak_tol))
+        report.rows.append(Row(name, "defl@peak", b.get("deflection_at_peak"),
+                               n.get("deflection_at_peak"),
+                               _relative(b.get("deflection_at_peak"),
+                                         n.get("deflection_at_peak")), "info"))
+        at = n.get("residual_deflection") or b.get("residual_deflection")
+        label = f"res@{at:g}mm" if isinstance(at, int | float) else "residual"
+        report.rows.append(_value_row(name, label, b.get("residual_load"),
+                                      n.get("residual_load"), residual_tol))
+        if bs == "stopped" or ns == "stopped":
+            report.rows.append(Row(name, "end defl", b.get("final_deflection"),
+                                   n.get("final_deflection"),
+                                   _relative(b.get("final_deflection"),
+                                             n.get("final_deflection")), "info"))
+    mean, count = mean_ratio({k: v for k, v in now_runs.items() if k in base_runs}
+                             if base_runs else now_runs)
+    report.ratio_now, report.ratio_n = mean, count
+    report.ratio_baseline = (base.get("ratio") or {}).get("mean")
+    if mean is None:
+        report.rows.append(Row("(all)", f"mean {RATIO_NAME}", report.ratio_baseline, None, None,
+                               "FAIL" if report.ratio_baseline is not None else "info",
+                               "no run with a test value"))
+    else:
+        inside = lo <= mean <= hi
+        report.rows.append(Row("(all)", f"mean {RATIO_NAME} (n={count})", report.ratio_baseline,
+                               mean, _relative(report.ratio_baseline, mean),
+                               "ok" if inside else "FAIL", f"band [{lo:g}, {hi:g}]"
+                               + ("" if inside else ": outside")))
+    return report
+
+
+def _cell(value) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        return f"{value:.5g}"
+    return str(value)
+
+
+def format_report(report: CompareReport) -> str:
+    """Aligned table: run, quantity, baseline, now, change, verdict, note; then the verdict."""
+    head = ("run", "quantity", "baseline", "now", "change", "verdict", "note")
+    body = [(r.run, r.quantity, _cell(r.baseline), _cell(r.now),
+             "-" if r.change is None else "inf" if math.isinf(r.change) else f"{r.change:+.1%}",
+             r.verdict, r.note) for r in report.rows]
+    widths = [max(len(x) for x in col) for col in zip(head, *body, strict=True)]
+    right = {2, 3, 4}
+
+    def line(cells) -> str:
+        return "  ".join(c.rjust(w) if i in right else c.ljust(w)
+                         for i, (c, w) in enumerate(zip(cells, widths, strict=True))).rstrip()
+
+    out = [line(head), line(["-" * w for w in widths]), *(line(c) for c in body)]
+    n_fail = len(report.failures)
+    out.append(f"tolerances: peak {report.peak_tol:.0%}, residual {report.residual_tol:.0%} "
+               f"(relative); mean {RATIO_NAME} band [{report.ratio_band[0]:g}, "
+               f"{report.ratio_band[1]:g}]")
+    out.append("PASS" if not n_fail else f"FAIL: {n_fail} check(s) failed")
+    return "\n".join(out)
+
+
+# -- the command -------------------------------------------------------------------------------
+def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.PathLike,
+                    update: bool = False, peak_tol: float | None = None,
+                    residual_tol: float | None = None,
+                    band: tuple[float, float] | None = None, command: str | None = None,
+                    echo: Callable[[str], None] | None = None) -> int:
+    """Body of `icewall compare RESULTS_DIR --baseline FILE [--update] [--peak-tol F]
+    [--residual-tol F] [--band LO HI]`; returns the exit status (0: pass, 1: a check failed).
+
+    A tolerance not given comes from the baseline's header, else the defaults (3 %, 10 %,
+    0.93-1.07). `update` rewrites the baseline from the results (after printing the comparison
+    with the old one where there is one) and returns 0; the header records `command`, the
+    tolerances in force and the date. Missing or unreadable inputs raise ResultError (exit 2).
+    """
+    if echo is None:
+        import click
+
+        echo = click.echo
+    records = measure_results(results_dir)
+    if not records:
+        raise ResultError(f"no result files (*.h5) in {results_dir}")
+    old = None
+    if not update or Path(baseline_path).exists():
+        old = read_baseline(baseline_path)
+    stated = (old or {}).get("tolerances") or {}
+    peak_tol = float(peak_tol if peak_tol is not None else stated.get("peak", PEAK_TOL))
+    residual_tol = float(residual_tol if residual_tol is not None
+                         else stated.get("residual", RESIDUAL_TOL))
+    band = tuple(band if band is not None else stated.get("ratio_band", RATIO_BAND))
+    if not (peak_tol >= 0 and residual_tol >= 0 and band[0] <= band[1]):
+        raise IcewallError("tolerances must be >= 0 and the band LO <= HI")
+    status = 0
+    if old is not None:
+        report = compare(records, old, peak_tol, residual_tol, band)
+        echo(format_report(report))
+        status = 0 if report.passed else 1
+    if update:
+        if command is None:
+            import shlex
+            import sys
+
+            command = "icewall " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+        write_baseline(baseline_path, make_baseline(records, command=command, peak_tol=peak_tol,
+                                                    residual_tol=residual_tol, ratio_band=band))
+        echo(f"baseline {baseline_path} written: {len(records)} run(s)")
+        return 0
+    return status
+
+
+def coarse_jobs(outdir: str | os.PathLike, variants: Mapping[str, Iterable[str]] | None = None,
+                decks_dir: str | os.PathLike = DECKS_DIR) -> list:
+    """Sweep jobs of the coarse CI variants (run name = deck stem)."""
+    from icewall.analysis.sweep import expand_jobs
+
+    jobs = []
+    for name, overrides in (variants or COARSE_VARIANTS).items():
+        jobs += expand_jobs([Path(decks_dir) / f"{name}.yaml"], list(overrides), None, outdir)
+    return jobs
+
+
+def run_coarse(outdir: str | os.PathLike, workers: int | None = None,
+               variants: Mapping[str, Iterable[str]] | None = None,
+               echo: Callable[[str], None] = print) -> list[dict]:
+    """Run the coarse variants in a local process pool (finished runs are skipped, as in
+    `icewall sweep`); writes OUTDIR/<name>.h5 and OUTDIR/sweep_summary.csv. Returns the
+    per-run results (name, status, run_time_s, ...)."""
+    from icewall.analysis.sweep import finished_status, run_local
+    from icewall.analysis.sweep_table import build_rows, format_table, ratio_stats, write_csv
+
+    os.makedirs(outdir, exist_ok=True)
+    jobs = coarse_jobs(outdir, variants)
+    results: dict[str, dict] = {}
+    todo = []
+    for job in jobs:
+        status = finished_status(job)
+        if status is None:
+            todo.append(job)
+        else:
+            results[job.name] = {"name": job.name, "path": job.output, "status": status,
+                                 "reason": "", "run_time_s": None, "n_steps": None}
+
+    def done(result: dict) -> None:
+        results[result["name"]] = result
+        echo(f"[{len(results)}/{len(jobs)}] {result['name']}: {result['status']} "
+             f"{result['run_time_s']:.1f} s")
+
+    start = time.perf_counter()
+    if todo:
+        run_local(todo, workers or os.cpu_count() or 1, done)
+    rows = build_rows(jobs, results)
+    stats = ratio_stats(rows)
+    write_csv(os.path.join(outdir, "sweep_summary.csv"), rows, stats)
+    echo(format_table(rows, stats))
+    echo(f"{len(todo)} coarse run(s) in {time.perf_counter() - start:.1f} s, "
+         f"{len(jobs) - len(todo)} skipped")
+    return [results[j.name] for j in jobs]
+
+
+def run_ci_comparison(outdir: str | os.PathLike, baseline: str | os.PathLike = BASELINE_COARSE,
+                      workers: int | None = None, update: bool = False,
+                      echo: Callable[[str], None] = print, **tolerances) -> int:
+    """Run the coarse CI variants into `outdir` and compare them with `baseline` (or, with
+    `update`, rewrite it). Returns the exit status of :func:`compare_command`. Only the
+    variants' own result files are compared (the run names of COARSE_VARIANTS)."""
+    if update and tolerances.get("band") is None and not Path(baseline).exists():
+        tolerances["band"] = CI_RATIO_BAND
+    results = run_coarse(outdir, workers, echo=echo)
+    paths = [r["path"] for r in results if os.path.exists(r["path"])]
+    if not paths:
+        raise ResultError(f"no coarse run left a result in {outdir}")
+    return compare_command(paths, baseline, update=update, echo=echo,
+                           command="python -m icewall.analysis.compare --update", **tolerances)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """`python -m icewall.analysis.compare [--update] [-o OUTDIR] [--baseline FILE] [-j N]`:
+    run the coarse CI variants and compare them with (or rewrite) the stored baseline."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m icewall.analysis.compare",
+                                     description=main.__doc__)
+    parser.add_argument("-o", "--out", default="results/ci_coarse")
+    parser.add_argument("--baseline", default=str(BASELINE_COARSE))
+    parser.add_argument("-j", "--workers", type=int, default=None)
+    parser.add_argument("--update", action="store_true")
+    args = parser.parse_args(argv)
+    try:
+        return run_ci_comparison(args.out, args.baseline, args.workers, args.update)
+    except IcewallError as exc:
+        print(f"error: {exc}")
+        return getattr(exc, "exit_code", 1)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
