@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DECK ?= decks/cf4.yaml
 
-.PHONY: run test lint validate bench schema clean
+.PHONY: run test lint validate compare bench schema clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -29,6 +29,9 @@ BLIND := cf6 cf7 cf14 tf3 tf5 tf6 tf7 vtt1 vtt2 vtt4
 
 validate: $(STAMP)  ## all specimen decks at full resolution (long): results/validation
 	$(BIN)/icewall sweep $(foreach d,$(ANALYSED) $(BLIND),decks/$(d).yaml) -o results/validation
+
+compare: $(STAMP)  ## coarse CI variants of the analysed decks against the stored baseline
+	$(BIN)/python -m icewall.analysis.compare -o results/compare
 
 bench: $(STAMP)  ## benchmarks, outside the test suite
 	$(BIN)/python benchmarks/bench_concrete.py

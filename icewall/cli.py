@@ -155,6 +155,29 @@ def sweep(decks: tuple[str, ...], sweep_file: str | None, overrides: tuple[str, 
 
 
 @main.command()
+@click.argument("results_dir", type=click.Path(file_okay=False))
+@click.option("--baseline", "baseline_path", required=True, type=click.Path(dir_okay=False),
+              help="Baseline file (YAML): per run peak and residual loads, and the tolerances.")
+@click.option("--update", is_flag=True, help="Rewrite the baseline from the results.")
+@click.option("--peak-tol", type=click.FloatRange(min=0.0), default=None,
+              help="Relative tolerance on each peak load [baseline's, else 0.03].")
+@click.option("--residual-tol", type=click.FloatRange(min=0.0), default=None,
+              help="Relative tolerance on each residual load [baseline's, else 0.10].")
+@click.option("--band", type=(float, float), default=None, metavar="LO HI",
+              help="Band of the mean test/predicted ultimate-load ratio [baseline's, else "
+                   "0.93 1.07].")
+@_handle_errors
+def compare(results_dir: str, baseline_path: str, update: bool, peak_tol: float | None,
+            residual_tol: float | None, band: tuple[float, float] | None) -> None:
+    """Compare the results in RESULTS_DIR (an icewall sweep output) with a stored baseline of
+    peak and residual loads; exit 1 when a check fails. --update rewrites the baseline."""
+    from icewall.analysis.compare import compare_command
+
+    sys.exit(compare_command(results_dir, baseline_path, update=update, peak_tol=peak_tol,
+                             residual_tol=residual_tol, band=band))
+
+
+@main.command()
 @click.argument("result", type=click.Path(dir_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
 @_handle_errors

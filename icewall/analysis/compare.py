@@ -8,8 +8,8 @@ A *baseline* is a YAML file with a header and one entry per run (the result file
     date: 2026-11-23T06:10:00+00:00
     command: python -m icewall.analysis.compare --update
     note: icewall's own regression values, not validation data
-    tolerances: {peak: 0.03, residual: 0.10, ratio_band: [0.6, 1.2]}
-    ratio: {name: ult_test/pred, mean: 0.75, n: 8}
+    tolerances: {peak: 0.03, residual: 0.10, ratio_band: [0.7, 1.1]}
+    ratio: {name: ult_test/pred, mean: 0.77, n: 8}
     runs:
       cf4:
         specimen: CF-4
@@ -77,21 +77,14 @@ DECKS_DIR = Path(__file__).resolve().parents[2] / "decks"
 BASELINE_COARSE = Path(__file__).resolve().parents[2] / "tests" / "compare" / \
     "baseline_coarse.yaml"
 # Coarse CI variants of the eight analysed decks: 2 mm instead of 1 mm increments, the run
-# ended at 16 mm instead of 40 mm, no field output (history only). Each traces its peak within
-# that range; CF-8's load still rises at 16 mm, so it runs to 30 mm (it snaps back at 26 mm).
-# CF-4, CF-8, CF-13 and TF-2 stop at a snap-back the displacement control cannot follow (also
-# with the increment cut to 1/16): that is what the code does today, recorded as it is.
-_COARSE = ("loads.control.increment=2", "outputs.fields=[]")
+# ended at 16 mm instead of 40 mm, no field output (history only). With the code of 2026-11-23
+# (halving relaxation <= 1) each traces its peak within 16 mm (peaks at 4 to 15 mm). CF-4,
+# TF-1 and TF-2 stop at a snap-back that displacement control cannot follow (also with the
+# increment cut to 1/8 mm), VTT3 on non-convergence at 10 mm: that is what the code does
+# today, recorded as it is (a stopped run is a valid baseline state).
+_COARSE = ("loads.control.target=16", "loads.control.increment=2", "outputs.fields=[]")
 COARSE_VARIANTS: dict[str, tuple[str, ...]] = {
-    "cf4": ("loads.control.target=16", *_COARSE),
-    "cf5": ("loads.control.target=16", *_COARSE),
-    "cf8": ("loads.control.target=30", *_COARSE),
-    "cf13": ("loads.control.target=16", *_COARSE),
-    "tf1": ("loads.control.target=16", *_COARSE),
-    "tf2": ("loads.control.target=16", *_COARSE),
-    "tf4": ("loads.control.target=16", *_COARSE),
-    "vtt3": ("loads.control.target=16", *_COARSE),
-}
+    name: _COARSE for name in ("cf4", "cf5", "cf8", "cf13", "tf1", "tf2", "tf4", "vtt3")}
 _RECORD_KEYS = ("specimen", "deck", "overrides", "status", "stop_reason", "unit", "peak_load",
                 "deflection_at_peak", "peaked", "final_deflection", "residual_deflection",
                 "residual_load")
@@ -302,10 +295,12 @@ def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float =
             report.rows.append(Row(name, "run", None, n.get("status"), None, "new",
                                    "not in the baseline"))
             continue
-        if list(b.get("overrides") or []) != list(n.get("overrides") or []):
-            report.rows.append(Row(name, "overrides", " ".join(b.get("overrides") or []),
-                                   " ".join(n.get("overrides") or []), None, "FAIL",
-                                   "made with other overrides than the baseline"))
+        b_over, n_over = list(b.get("overrides") or []), list(n.get("overrides") or [])
+        if b_over != n_over:  # shown: the assignments that differ
+            report.rows.append(Row(name, "overrides",
+                                   " ".join(o for o in b_over if o not in n_over) or "-",
+                                   " ".join(o for o in n_over if o not in b_over) or "-",
+                                   None, "FAIL", "made with other overrides than the baseline"))
         bs, ns = b.get("status"), n.get("status")
         if bs != ns:
             why = {("completed", "stopped"): f"now stops: {n.get('stop_reason', '')}",
@@ -361,7 +356,8 @@ def format_report(report: CompareReport) -> str:
     head = ("run", "quantity", "baseline", "now", "change", "verdict", "note")
     body = [(r.run, r.quantity, _cell(r.baseline), _cell(r.now),
              "-" if r.change is None else "inf" if math.isinf(r.change) else f"{r.change:+.1%}",
-             r.verdict, r.note) for r in report.rows]
+             r.verdict, r.note if len(r.note) <= 90 else r.note[:87] + "...")
+            for r in report.rows]
     widths = [max(len(x) for x in col) for col in zip(head, *body, strict=True)]
     right = {2, 3, 4}
 

@@ -1,0 +1,154 @@
+"""icewall compare: unit tests on synthetic records, and the CI comparison of the coarse
+variants against the stored baseline (tests/compare/baseline_coarse.yaml)."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import pytest
+
+from icewall.analysis import compare as cmp
+from icewall.errors import ResultError
+
+HERE = Path(__file__).resolve().parent
+BASELINE = HERE / "baseline_coarse.yaml"
+WIDE = (0.0, 10.0)  # a band that never fails: tests of the per-run checks
+
+
+def record(peak=5.0, residual=3.0, status="completed", specimen="CF-4", **extra) -> dict:
+    rec = {"specimen": specimen, "deck": "decks/cf4.yaml", "overrides": ["loads.control.target=16"],
+           "status": status, "stop_reason": "" if status == "completed" else "snap-back",
+           "unit": "MPa", "peak_load": peak, "deflection_at_peak": 10.0, "peaked": True,
+           "final_deflection": 16.0 if status == "completed" else 12.0,
+           "residual_deflection": 16.0,
+           "residual_load": residual if status == "completed" else None}
+    rec.update(extra)
+    return rec
+
+
+def baseline_of(records: dict, band=WIDE) -> dict:
+    return cmp.make_baseline(records, command="test", ratio_band=band)
+
+
+def verdicts(report, quantity: str) -> dict[str, str]:
+    return {r.run: r.verdict for r in report.rows if r.quantity.startswith(quantity)}
+
+
+def test_peak_moved_5_percent_fails_at_3_percent():
+    base = baseline_of({"cf4": record(peak=5.0), "cf5": record(peak=4.0, specimen="CF-5")})
+    now = {"cf4": record(peak=5.25), "cf5": record(peak=4.0 * 1.02, specimen="CF-5")}
+    report = cmp.compare(now, base, peak_tol=0.03, ratio_band=WIDE)
+    assert verdicts(report, "peak") == {"cf4": "FAIL", "cf5": "ok"}
+    assert not report.passed
+    row = next(r for r in report.rows if r.run == "cf4" and r.quantity == "peak")
+    assert row.change == pytest.approx(0.05)
+    assert "FAIL" in cmp.format_report(report).splitlines()[-1]
+    # the same 5 % passes a stated 6 % tolerance
+    assert cmp.compare(now, base, peak_tol=0.06, ratio_band=WIDE).passed
+
+
+def test_residual_within_10_percent_passes_beyond_fails():
+    base = baseline_of({"cf4": record(residual=3.0)})
+    within = cmp.compare({"cf4": record(residual=3.0 * 0.92)}, base, residual_tol=0.10,
+                         ratio_band=WIDE)
+    assert within.passed and verdicts(within, "res@16mm") == {"cf4": "ok"}
+    beyond = cmp.compare({"cf4": record(residual=3.0 * 1.12)}, base, residual_tol=0.10,
+                         ratio_band=WIDE)
+    assert verdicts(beyond, "res@16mm") == {"cf4": "FAIL"} and not beyond.passed
+
+
+def test_completed_run_that_now_stops_fails_and_vice_versa():
+    base = baseline_of({"cf4": record(), "tf2": record(status="stopped", specimen="TF-2")})
+    now = {"cf4": record(status="stopped"), "tf2": record(status="completed", specimen="TF-2")}
+    report = cmp.compare(now, base, ratio_band=WIDE)
+    status = {r.run: r for r in report.rows if r.quantity == "status"}
+    assert status["cf4"].verdict == "FAIL" and "now stops" in status["cf4"].note
+    assert status["tf2"].verdict == "FAIL" and "now completes" in status["tf2"].note
+    # the residual of a run that stopped short has no value: reported, and failed
+    assert verdicts(report, "res@") == {"cf4": "FAIL", "tf2": "FAIL"}
+
+
+def test_stopped_in_both_is_a_valid_state():
+    base = baseline_of({"cf4": record(status="stopped")})
+    report = cmp.compare({"cf4": record(status="stopped")}, base, ratio_band=WIDE)
+    assert report.passed
+    assert verdicts(report, "res@") == {"cf4": "ok"}  # no value on either side
+
+
+def test_missing_new_and_other_overrides():
+    base = baseline_of({"cf4": record(), "cf5": record(specimen="CF-5")})
+    now = {"cf4": record(overrides=["loads.control.target=20"]), "vtt3": record(specimen="VTT3")}
+    report = cmp.compare(now, base, ratio_band=WIDE)
+    by = {(r.run, r.quantity): r.verdict for r in report.rows}
+    assert by[("cf5", "run")] == "FAIL"  # in the baseline, not in the results
+    assert by[("vtt3", "run")] == "new"  # reported, does not fail by itself
+    assert by[("cf4", "overrides")] == "FAIL"
+
+
+def test_mean_test_over_predicted_ratio_band():
+    # CF-4 test 4.91 MPa, CF-5 test 3.82 MPa (reference_data.yaml); a blind deck has no test
+    recs = {"cf4": record(peak=4.91), "cf5": record(peak=3.82 / 0.9, specimen="CF-5"),
+            "cf6": record(peak=9.0, specimen="CF-6")}
+    mean, n = cmp.mean_ratio(recs)
+    assert n == 2 and mean == pytest.approx(0.95)
+    base = baseline_of(recs)
+    assert cmp.compare(recs, base, ratio_band=(0.93, 1.07)).passed
+    low = cmp.compare(recs, base, peak_tol=1.0, ratio_band=(0.96, 1.07))
+    ratio_row = low.rows[-1]
+    assert ratio_row.verdict == "FAIL" and "outside" in ratio_row.note and not low.passed
+    # every peak 10 % higher: the per-run check and the band (0.93) both catch it
+    higher = {k: {**v, "peak_load": v["peak_load"] * 1.1} for k, v in recs.items()}
+    report = cmp.compare(higher, base, peak_tol=0.03, ratio_band=(0.93, 1.07))
+    assert report.rows[-1].verdict == "FAIL"
+    assert verdicts(report, "peak") == {"cf4": "FAIL", "cf5": "FAIL", "cf6": "FAIL"}
+
+
+def test_baseline_file_round_trip_and_command(tmp_path):
+    recs = {"cf4": record(), "cf5": record(peak=4.0, specimen="CF-5")}
+    path = tmp_path / "base.yaml"
+    cmp.write_baseline(path, cmp.make_baseline(recs, command="icewall compare x --update",
+                                               peak_tol=0.02, ratio_band=(0.5, 2.0)))
+    text = path.read_text()
+    assert "# Written by: icewall compare x --update" in text
+    data = cmp.read_baseline(path)
+    assert "not validation data" in data["note"] and data["command"] == "icewall compare x --update"
+    assert data["tolerances"] == {"peak": 0.02, "residual": 0.10, "ratio_band": [0.5, 2.0]}
+    assert data["runs"]["cf5"]["peak_load"] == 4.0 and data["icewall_version"]
+    lines: list[str] = []
+    # the header's tolerances apply when none is given: 2.5 % fails at the stated 2 %
+    moved = copy.deepcopy(recs)
+    moved["cf4"]["peak_load"] = 5.0 * 1.025
+    assert cmp.compare_command(moved, path, echo=lines.append) == 1
+    assert cmp.compare_command(moved, path, peak_tol=0.03, echo=lines.append) == 0
+    assert lines[0].split()[:5] == ["run", "quantity", "baseline", "now", "change"]
+    # --update rewrites it from the results
+    assert cmp.compare_command(moved, path, update=True, command="update", echo=lines.append) == 0
+    assert cmp.read_baseline(path)["runs"]["cf4"]["peak_load"] == pytest.approx(5.125)
+    assert cmp.compare_command(moved, path, echo=lines.append) == 0
+
+
+def test_missing_baseline_is_an_error(tmp_path):
+    with pytest.raises(ResultError, match="--update"):
+        cmp.compare_command({"cf4": record()}, tmp_path / "none.yaml", echo=print)
+    with pytest.raises(ResultError, match="not found"):
+        cmp.compare_command(tmp_path / "nothing", tmp_path / "none.yaml", echo=print)
+
+
+def test_stored_baseline_matches_the_coarse_variants():
+    data = cmp.read_baseline(BASELINE)
+    assert set(data["runs"]) == set(cmp.COARSE_VARIANTS)
+    for name, run in data["runs"].items():
+        assert run["overrides"] == list(cmp.COARSE_VARIANTS[name])
+        assert run["deck"] == f"decks/{name}.yaml"
+    assert "not validation data" in data["note"]
+
+
+def test_ci_comparison_of_the_coarse_variants(tmp_path):
+    """Runs the eight coarse variants (about 2 minutes on 2 cores) and compares them with the
+    stored baseline: must pass on the current code."""
+    lines: list[str] = []
+    status = cmp.run_ci_comparison(tmp_path / "ci", BASELINE, workers=2, echo=lines.append)
+    assert status == 0, "\n".join(lines)
+    assert lines[-1].splitlines()[-1] == "PASS"
+    assert len(list((tmp_path / "ci").glob("*.h5"))) == len(cmp.COARSE_VARIANTS)
