@@ -39,7 +39,8 @@ class Layout:
     region_materials: dict[str, str]  # region name -> deck material key
 
 
-def _mirror(xs, model: str) -> list[float]:
+def mirror_positions(xs, model: str) -> list[float]:
+    """Positions x >= 0 from midspan and, in a full model, their mirror images (-x after x)."""
     out = []
     for x in xs:
         out.append(x)
@@ -102,7 +103,7 @@ def build_layout(deck: Deck) -> Layout:
     xs = [x_lo, half]
     for a, b in d_spans + d_spans_end + bp_spans + leg_spans + patch_spans:
         xs += [a, b]
-    points = _mirror([deck.loads.control.x] + [s.x for s in geo.supports], model)
+    points = mirror_positions([deck.loads.control.x] + [s.x for s in geo.supports], model)
     x_lines = _add_node_lines(_unique([x for x in xs if x >= x_lo - _TOL]), points,
                               deck.analysis.element_size, deck.analysis.element)
     ys = [0.0, t_bot, depth - t_top, depth]

@@ -7,15 +7,9 @@ import numpy as np
 from icewall.deck.schema import Deck
 from icewall.errors import MeshError
 from icewall.mesh.convert import QUAD_EDGES
+from icewall.mesh.layout import mirror_positions
 
 _TOL = 1e-6
-
-
-def _mirror(values, model: str) -> list[float]:
-    out = list(values)
-    if model == "full":
-        out += [-v for v in values if v > 0]
-    return out
 
 
 def nearest_node(points: np.ndarray, x: float, y: float, what: str) -> int:
@@ -46,7 +40,7 @@ def build_sets(deck: Deck, points: np.ndarray, cells: np.ndarray,
         node_sets["symmetry"] = np.flatnonzero(np.abs(x) < _TOL)
     for i, sup in enumerate(geo.supports, start=1):
         nodes = []
-        for xs in _mirror([sup.x], model):
+        for xs in mirror_positions([sup.x], model):
             column = np.abs(x - xs) < _TOL
             if not column.any():
                 raise MeshError(f"no mesh node on the support line x = {xs:g} mm")
@@ -62,7 +56,7 @@ def build_sets(deck: Deck, points: np.ndarray, cells: np.ndarray,
     width = deck.loads.patches.width
     edge_sets: dict[str, np.ndarray] = {}
     for i, xc in enumerate(deck.loads.patches.positions, start=1):
-        for side, xp in enumerate(_mirror([xc], model)):
+        for side, xp in enumerate(mirror_positions([xc], model)):
             inside = on_top & (np.abs(mid_x - xp) < 0.5 * width)
             name = f"patch_{i}" + ("" if side == 0 else "_mirror")
             if not inside.any():

@@ -31,15 +31,15 @@ from icewall.interface.gap import (
     update_states,
 )
 from icewall.model.build import Model
+from icewall.solve.constraints import SupportConstraints
 
 
-class GapConstraints:
+class GapConstraints(SupportConstraints):
     """u[fixed] = 0 and one gap element per interface node pair."""
 
     def __init__(self, model: Model) -> None:
+        super().__init__(model.dof_map.n_equations, model.fixed)
         mesh, interface = model.mesh, model.deck.materials.interface
-        self.n_equations = model.dof_map.n_equations
-        self.fixed = np.asarray(model.fixed, dtype=int)
         self.C = constraint_matrix(mesh.interface_pairs, mesh.interface_normals,
                                    model.dof_map.node_equations, self.n_equations)
         self.n_pairs = len(mesh.interface_pairs)
@@ -81,11 +81,6 @@ class GapConstraints:
     def constraint_force(self) -> np.ndarray:
         return interface_forces(self.C, self.state)
 
-    def restrict(self, vector: np.ndarray) -> np.ndarray:
-        out = np.array(vector, dtype=float)
-        out[self.fixed] = 0.0
-        return out
-
     def _redundant_active(self) -> np.ndarray:
         return self.redundant & active_rows(self.state)
 
@@ -109,9 +104,6 @@ class GapConstraints:
                             self.implicit_slip)
         rhs[self.n_equations:][self._redundant_active()] = 0.0
         return rhs
-
-    def split(self, solution: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return solution[:self.n_equations], solution[self.n_equations:]
 
     def apply(self, multiplier_increment: np.ndarray, u: np.ndarray) -> int:
         _, d_N, d_T = split_solution(np.concatenate([np.zeros(self.n_equations),
