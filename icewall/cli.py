@@ -269,5 +269,10 @@ def schema(output: str | None) -> None:
         click.echo(text, nl=False)
 
 
+from icewall.cli_post import export, plot, report  # noqa: E402  (post-processing commands)
+
+for _command in (plot, export, report):
+    main.add_command(_command)
+
 if __name__ == "__main__":  # pragma: no cover
     main()

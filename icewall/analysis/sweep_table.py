@@ -5,8 +5,10 @@ against the thesis' FEA, for the ultimate (peak) load and the residual load at 4
 icewall.analysis.extract defines them (`peaked` is "no" where the load had not dropped by the
 end of the run: the peak is then a lower bound). Reference values come from
 icewall.analysis.reference where it knows the specimen, else from the deck's
-`specimen.reference`. Below the rows: the mean and the coefficient of variation (sample
-standard deviation / mean) of each ratio column over the rows that have a value.
+`specimen.reference`. Ductility per CSA S474 clause 8.4.4 (icewall.post.ductility): the
+ratio mu reached, pass / fail / undecided, and the energy absorbed (area under the total jack
+load - control deflection curve, N mm). Below the rows: the mean and the coefficient of
+variation (sample standard deviation / mean) of each ratio column over the rows that have a value.
 """
 
 from __future__ import annotations
@@ -24,10 +26,11 @@ RATIOS = {  # column -> (reference field, our measure)
     "res_test/pred": ("residual_test", "residual_40"),
     "res_thesis/pred": ("residual_thesis", "residual_40"),
 }
+DUCTILITY = ("ductility_ratio", "ductility", "energy_Nmm")  # CSA S474 8.4.4 (icewall.post)
 COLUMNS = ("name", "specimen", "overrides", "status", "peak", "peak_deflection", "peaked",
-           "residual_40", "unit", "n_steps", "run_time_s", *RATIOS, "reason")
+           "residual_40", "unit", "n_steps", "run_time_s", *RATIOS, *DUCTILITY, "reason")
 _HEADERS = {"peak_deflection": "defl@peak", "residual_40": "res@40mm", "run_time_s": "time_s",
-            "n_steps": "steps"}
+            "n_steps": "steps", "ductility_ratio": "mu", "energy_Nmm": "energy_Nmm"}
 _SCALE = {"N": 1.0, "kN": 1e3, "MN": 1e6, "MPa": 1.0, "N/mm2": 1.0}
 
 
@@ -35,17 +38,29 @@ def _measures(path: str) -> dict:
     """Peak load, its deflection and the residual load at 40 mm of one result file, as the
     shared extractor (icewall.analysis.extract) defines them."""
     from icewall.analysis.extract import extract
+    from icewall.post.ductility import result_ductility
     from icewall.results.reader import open_result
 
     with open_result(path) as res:
         attrs = res.attrs
+        ductility = result_ductility(res) if attrs.get("n_steps") else {}
     fig = extract(path, residual_deflection=RESIDUAL_AT)
     return {"specimen": attrs.get("specimen"), "status": attrs.get("status"),
             "reason": attrs.get("stop_reason", ""), "unit": attrs.get("load_unit"),
             "n_steps": attrs.get("n_steps"), "run_time_s": attrs.get("run_time_s"),
             "peak": fig.get("peak_load"), "peak_deflection": fig.get("deflection_at_peak"),
             "peaked": {True: "yes", False: "no"}.get(fig.get("peaked")),
-            "residual_40": fig.get("residual_load_40")}
+            "residual_40": fig.get("residual_load_40"),
+            "ductility_ratio": ductility.get("ductility_ratio"),
+            "ductility": _verdict(ductility), "energy_Nmm": ductility.get("energy_Nmm")}
+
+
+def _verdict(ductility: dict) -> str | None:
+    """pass / fail / undecided, with '>=' noted where the ratio reached is a lower bound."""
+    verdict = ductility.get("verdict")
+    if verdict and ductility.get("ratio_is_lower_bound") and verdict != "fail":
+        return f"{verdict} (mu>=)"
+    return verdict
 
 
 def _references(job, specimen: str | None) -> tuple[dict, str | None]:
@@ -120,7 +135,8 @@ def _text(value, column: str) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "-"
     if isinstance(value, float):
-        return f"{value:.3f}" if column in RATIOS or column == "run_time_s" else f"{value:.5g}"
+        return (f"{value:.3f}" if column in RATIOS or column == "run_time_s" else
+                f"{value:.2f}" if column == "ductility_ratio" else f"{value:.5g}")
     return str(value)
 
 
@@ -146,7 +162,8 @@ def format_table(rows: list[dict], stats) -> str:
             for r in rows + _stat_rows(stats)]
     head = [_HEADERS.get(c, c) for c in columns]
     widths = [max(len(x) for x in col) for col in zip(head, *body, strict=True)]
-    numeric = {"peak", "peak_deflection", "residual_40", "n_steps", "run_time_s", *RATIOS}
+    numeric = {"peak", "peak_deflection", "residual_40", "n_steps", "run_time_s", *RATIOS,
+               "ductility_ratio", "energy_Nmm"}
 
     def line(cells):
         return "  ".join(x.rjust(w) if c in numeric else x.ljust(w)

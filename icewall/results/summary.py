@@ -13,8 +13,11 @@ _NO_FINISH = "no finish record: run still going, or killed"
 
 def summarize(path: str | os.PathLike) -> dict:
     """Key numbers of one analysis as a JSON-serialisable dict (None where there are no steps)."""
+    from icewall.post.ductility import result_ductility
+
     with open_result(path) as r:
         a, h = r.attrs, r.history
+        ductility = result_ductility(r) if len(h["step"]) else None
     status = str(a.get("status", ""))
     reason = str(a.get("stop_reason", ""))
     if status == "running" and not reason:
@@ -26,6 +29,7 @@ def summarize(path: str | os.PathLike) -> dict:
         "final_deflection": None, "total_iterations": 0, "iterations_per_step_median": None,
         "iterations_per_step_max": None, "run_time_s": a.get("run_time_s"),
         "load_measure": a.get("load_measure"), "load_unit": a.get("load_unit"),
+        "ductility": ductility,  # CSA S474 8.4.4, icewall.post.ductility
     }
     if out["n_steps"]:
         load, defl, its = h["load"], h["control_displacement"], h["iterations"]
@@ -45,6 +49,22 @@ def _num(value, unit: str = "", fmt: str = ".6g") -> str:
         return "-"
     text = format(value, fmt) if isinstance(value, float) else str(value)
     return f"{text} {unit}".rstrip()
+
+
+def _ductility_rows(d: dict | None, unit: str) -> list[tuple[str, str]]:
+    """Lines of the CSA S474 clause 8.4.4 check (verdict, yield point, energy, why)."""
+    if not d or d.get("ductility_ratio") is None:
+        return [("ductility (CSA S474)", d["message"] if d else "-")]
+    bound = ">= " if d["ratio_is_lower_bound"] else ""
+    energy = f"{_num(d['energy'], d['energy_unit'], '.4g')}"
+    if d.get("energy_Nmm") is not None:
+        energy += f" = {d['energy_Nmm']:.4g} N mm (total jack load)"
+    return [("ductility (CSA S474)", f"{d['verdict']}: mu = {bound}{d['ductility_ratio']:.2f}"
+             f" (needs {d['required_ratio']:g} at {d['load_fraction']:.0%} of P_y)"),
+            ("yield load, deflection", f"{d['yield_load']:.6g} {unit}, "
+                                       f"{d['yield_deflection']:.4g} mm"),
+            ("energy absorbed", energy + " to the end of the run"),
+            ("ductility note", d["message"])]
 
 
 def format_summary(summary: dict) -> str:
@@ -70,6 +90,7 @@ def format_summary(summary: dict) -> str:
         ("total iterations", _num(s.get("total_iterations"))),
         ("iterations per step", iters),
         ("run time", _num(s.get("run_time_s"), "s", ".1f")),
+        *_ductility_rows(s.get("ductility"), lu),
     ]
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}} : {v}" for k, v in rows)
