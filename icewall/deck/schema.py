@@ -280,16 +280,20 @@ class Analysis:
                                               "secant, the thesis)", minimum=0.0, maximum=1.0)
     acceleration: str = option("halving", doc="relaxation of the iteration's corrections: "
                                "aitken (dynamic relaxation from successive corrections), "
-                               "halving (halve when the load norm grows) or none (the thesis)",
+                               "halving (halve when the load norm grows, grow back by 1.5 "
+                               "while it falls, to a limit that halves every third rise in "
+                               "the increment) or none (the thesis)",
                                choices=("aitken", "halving", "none"))
     max_flag_changes: int = option(4, doc="times a concrete Gauss point may change its crack "
                                    "or crush flags within one increment before it may only "
                                    "unload and reload for the rest of it (chatter damping)",
                                    minimum=1)
-    on_snap_back: str = option("stop", doc="a load drop that does not shrink with the step "
-                               "(the control displacement snaps back): stop the run with reason "
-                               "snap-back, or continue, accepting the drop as a snap-through "
-                               "(recorded in the history column snap_back)",
+    on_snap_back: str = option("continue", doc="a load drop that does not shrink with the "
+                               "step (the control displacement snaps back): continue, accepting "
+                               "the drop as a snap-through at the held control displacement, as "
+                               "a stroke-controlled test does (flagged in the history column "
+                               "snap_back and counted by icewall summary), or stop the run with "
+                               "reason snap-back",
                                choices=("stop", "continue"))
     max_relaxation: float = option(1.0, doc="largest factor on a correction in the halving "
                                    "scheme: above 1 it over-relaxes the slow drift of the "

@@ -30,6 +30,7 @@ def summarize(path: str | os.PathLike) -> dict:
         "iterations_per_step_max": None, "run_time_s": a.get("run_time_s"),
         "load_measure": a.get("load_measure"), "load_unit": a.get("load_unit"),
         "ductility": ductility,  # CSA S474 8.4.4, icewall.post.ductility
+        "snap_throughs": [],  # control deflections where a snap-back drop was accepted
     }
     if out["n_steps"]:
         load, defl, its = h["load"], h["control_displacement"], h["iterations"]
@@ -41,6 +42,8 @@ def summarize(path: str | os.PathLike) -> dict:
             "iterations_per_step_median": float(np.median(its)),
             "iterations_per_step_max": int(its.max()),
         })
+        if "snap_back" in h:
+            out["snap_throughs"] = [float(d) for d in defl[np.asarray(h["snap_back"]) > 0]]
     return out
 
 
@@ -89,6 +92,8 @@ def format_summary(summary: dict) -> str:
         ("final deflection", _num(s.get("final_deflection"), "mm")),
         ("total iterations", _num(s.get("total_iterations"))),
         ("iterations per step", iters),
+        ("snap-throughs", ", ".join(f"at {d:.4g} mm" for d in s.get("snap_throughs") or ())
+         or "none"),
         ("run time", _num(s.get("run_time_s"), "s", ".1f")),
         *_ductility_rows(s.get("ductility"), lu),
     ]

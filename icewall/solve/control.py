@@ -30,6 +30,7 @@ from icewall.solve.settings import SolverSettings
 SNAP_BACK_DROP = 0.25
 MIN_RELAXATION = 0.125
 MAX_RELAXATION = 1.0
+CYCLE_RISES = 3  # rises of the load norm in an increment before the growth limit halves
 log = logging.getLogger(__name__)
 
 
@@ -134,6 +135,14 @@ def _relaxation(kind: str, iteration: int, relaxation: float, correction: np.nda
     return min(growth_limit, 1.5 * relaxation)
 
 
+def _growth_limit(max_relaxation: float, rises: int) -> float:
+    """The largest relaxation the halving scheme may grow back to after the load norm rose
+    `rises` times in this increment: halved every CYCLE_RISES rises, so that a limit cycle of
+    the secant iteration (grow to 1, overshoot, halve, grow again: CF-14 near its peak repeats
+    load norms 0.125, 0.070, 0.066 for 200 iterations) is damped out."""
+    return max(MIN_RELAXATION, max_relaxation * 0.5 ** (rises // CYCLE_RISES))
+
+
 def _external_force_norm(constraints, applied: np.ndarray, internal: np.ndarray) -> float:
     """|| applied loads on the free equations, reactions on the supported ones ||."""
     reactions = internal[constraints.fixed]
@@ -156,6 +165,7 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
     flips = 0
     factor = None
     relaxation, previous_load_norm, previous_correction = 1.0, math.inf, None
+    rises = 0  # times the load norm rose in this increment
     for iteration in range(1, settings.max_iterations + 1):
         ev = s.evaluate(u, start.states, frozen)
         if not np.all(np.isfinite(ev.internal_force)):
@@ -203,9 +213,10 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
             dm = dP * m1 + m2
         if not (np.all(np.isfinite(du)) and math.isfinite(dP)):
             raise StepFailed("non-finite displacement correction", "NaN")
+        rises += iteration >= 3 and load_norm > previous_load_norm
         relaxation = _relaxation(settings.acceleration, iteration, relaxation, du,
                                  previous_correction, load_norm, previous_load_norm,
-                                 settings.max_relaxation)
+                                 _growth_limit(settings.max_relaxation, rises))
         previous_correction, previous_load_norm = du, load_norm
         # (multipliers are not relaxed: prescribed ones, e.g. zero on open pairs, stay exact)
         du, dP = relaxation * du, relaxation * dP

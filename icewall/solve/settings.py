@@ -20,7 +20,7 @@ class SolverSettings:
     reset_slip_each_step: bool  # thesis 3.3.4: slipped pairs start each step fixed
     acceleration: str = "halving"  # relaxation of the corrections: halving | aitken | none
     max_flag_changes: int = 4  # flag changes of a Gauss point in an increment before freezing
-    on_snap_back: str = "stop"  # stop | continue (accept the drop, recorded per step)
+    on_snap_back: str = "continue"  # stop | continue (accept the drop, recorded per step)
     max_relaxation: float = 1.0  # largest relaxation factor of the halving scheme
 
 

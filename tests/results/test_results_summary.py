@@ -82,3 +82,19 @@ def test_summary_of_empty_and_unfinished_runs(tmp_path):
     assert s["n_steps"] == 10 and s["deflection_at_max_load"] == pytest.approx(0.8)
     with pytest.raises(ResultError):
         summarize(tmp_path / "killed.h5")
+
+
+def test_summary_lists_accepted_snap_throughs(tmp_path):
+    path = tmp_path / "snap.h5"
+    w = ResultWriter(path, deck_text="deck", deck_path="s.yaml", mesh=one_cell_mesh(),
+                     attrs={"specimen": "SCS-3", "load_measure": "w", "load_unit": "MPa"})
+    for i, (d, load, snap) in enumerate([(1.0, 2.0, 0), (2.0, 3.0, 0), (2.0625, 1.0, 1),
+                                         (3.0, 1.1, 0)]):
+        w.write_step(StepRecord(i + 1, d, load, load, 3, 1e-8, 1e-7, 0.1,
+                                scalars={"snap_back": snap}))
+    w.finish("completed", "")
+    s = summarize(path)
+    assert s["snap_throughs"] == [pytest.approx(2.0625)]
+    assert "snap-throughs          : at 2.062 mm" in format_summary(s)
+    curve_file(tmp_path / "none.h5")
+    assert "snap-throughs          : none" in format_summary(summarize(tmp_path / "none.h5"))

@@ -71,10 +71,11 @@ def bar_problem(length: float, n_el: int, E=30000.0, strength=3.0, weak=0.9,
 
 
 def settings(target: float, increment: float, tolerance: float = 1e-8, iterations: int = 400,
-             cuts: int = 4) -> SolverSettings:
+             cuts: int = 4, on_snap_back: str = "stop") -> SolverSettings:
     return SolverSettings(tolerance_displacement=tolerance, tolerance_load=tolerance,
                           max_iterations=iterations, max_step_cuts=cuts,
                           stiffness_update="every_iteration", increment=increment,
-                          target=target, preload_increments=1, reset_slip_each_step=True)
+                          target=target, preload_increments=1, reset_slip_each_step=True,
+                          on_snap_back=on_snap_back)
 
 

@@ -62,3 +62,22 @@ def test_snap_back_is_reported_not_mis_solved():
     for inc in converged:
         assert inc.load_factor == pytest.approx(30000.0 * inc.control_displacement / 1000 * 10,
                                                 rel=1e-6)
+
+
+def test_snap_back_accepted_as_snap_through_lands_on_the_softened_branch():
+    # on_snap_back: continue (the deck default): the drop is accepted only at the smallest
+    # step, flagged, and the run goes on from a genuine equilibrium after the jump: the weak
+    # element is fully softened (stress 0 beyond eps_f), so the bar carries no load.
+    problem, initial = bar_problem(1000.0, 10, failure_strain=0.0003)
+    steps = list(follow_path(problem, settings(0.5, 0.02, iterations=200, cuts=3,
+                                               on_snap_back="continue"), initial))
+    incs = [inc for inc, _ in steps]
+    assert incs[-1].control_displacement == pytest.approx(0.5)
+    jumps = [k for k, inc in enumerate(incs) if inc.snap_back]
+    assert len(jumps) == 1
+    before, after = incs[: jumps[0]], incs[jumps[0]:]
+    for inc in before:  # the ascending branch, exact
+        assert inc.load_factor == pytest.approx(30000.0 * inc.control_displacement / 1000 * 10,
+                                                rel=1e-6)
+    peak = max(inc.load_factor for inc in before)
+    assert all(abs(inc.load_factor) < 1e-6 * peak for inc in after)
