@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DECK ?= decks/cf4.yaml
 
-.PHONY: run test lint validate compare bench schema clean
+.PHONY: run test lint validate compare convergence bench schema clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -32,6 +32,14 @@ validate: $(STAMP)  ## all specimen decks at full resolution (long): results/val
 
 compare: $(STAMP)  ## coarse CI variants of the analysed decks against the stored baseline
 	$(BIN)/python -m icewall.analysis.compare -o results/compare
+
+$(VENV)/.plot: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[dev,plot]"
+	touch $(VENV)/.plot
+
+convergence: $(VENV)/.plot  ## CF-4 and TF-1 over a discretisation ladder (long): results/convergence
+	$(BIN)/icewall convergence decks/cf4.yaml -j 2 -o results/convergence/cf4
+	$(BIN)/icewall convergence decks/tf1.yaml -j 2 -o results/convergence/tf1
 
 bench: $(STAMP)  ## benchmarks, outside the test suite
 	$(BIN)/python benchmarks/bench_concrete.py

@@ -269,6 +269,12 @@ def schema(output: str | None) -> None:
         click.echo(text, nl=False)
 
 
+from icewall.cli_study import convergence  # noqa: E402  (registered after main is defined)
+
+convergence.callback = _handle_errors(convergence.callback)
+main.add_command(convergence)
+
+
 from icewall.cli_post import export, plot, report  # noqa: E402  (post-processing commands)
 
 for _command in (plot, export, report):
