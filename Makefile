@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DECK ?= decks/cf4.yaml
 
-.PHONY: run test lint validate compare convergence bench schema clean
+.PHONY: run test lint stability validate compare convergence bench schema clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +23,9 @@ test: $(STAMP)  ## the default test suite (fast; no long validation runs)
 
 lint: $(STAMP)
 	$(BIN)/ruff check icewall tests benchmarks
+
+stability: $(STAMP)  ## the stability suite: stiff and extreme cases, each run twice (minutes)
+	$(BIN)/python -m pytest -q -m stability tests/stability
 
 ANALYSED := cf4 cf5 cf8 cf13 tf1 tf2 tf4 vtt3
 BLIND := cf6 cf7 cf14 tf3 tf5 tf6 tf7 vtt1 vtt2 vtt4

@@ -105,14 +105,18 @@ def mesh(deck: str, overrides: tuple[str, ...], out_dir: str, formats: str) -> N
 @click.option("-o", "--output", type=click.Path(), default=None,
               help="Result file (.h5) or directory [default: outputs.directory of the deck].")
 @click.option("-q", "--quiet", is_flag=True, help="No progress output.")
+@click.option("--resume", is_flag=True,
+              help="Go on with the interrupted run of DECK (same deck, --set and output) from "
+                   "its last converged step, in the same result file.")
 @_handle_errors
-def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool) -> None:
+def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool,
+        resume: bool) -> None:
     """Run the analysis of DECK and write an HDF5 result."""
     from icewall.deck.load import load_deck
     from icewall.pipeline import run_deck
 
     loaded = load_deck(deck, overrides)
-    report = run_deck(loaded, output, progress=None if quiet else click.echo)
+    report = run_deck(loaded, output, progress=None if quiet else click.echo, resume=resume)
     if not quiet:
         t = report.timings
         shares = ", ".join(f"{k} {v:.3f} s" for k, v in t.items() if k != "total")

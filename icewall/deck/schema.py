@@ -313,7 +313,10 @@ class Analysis:
 @dataclass(frozen=True, kw_only=True)
 class Outputs:
     fields: tuple[str, ...] = option(["displacement", "stress", "strain"],
-                                     doc="what is written per step",
+                                     doc="what is written per step (state: concrete "
+                                     "crack/crush flags and orthotropy angle, steel plastic "
+                                     "strain and the interface pair arrays; needed by the crack, "
+                                     "deformed-shape and interface plots)",
                                      choices=("displacement", "stress", "strain", "state"))
     every: int = option(1, doc="write the fields every N steps (history: every step)",
                         minimum=1)

@@ -44,7 +44,8 @@ class ResultFile:
         if not os.path.exists(self.path):
             hint = ""
             if os.path.exists(self.path + PARTIAL_SUFFIX):
-                hint = f" (an unfinished run left {self.path + PARTIAL_SUFFIX}; open that)"
+                hint = (f" (an unfinished run left {self.path + PARTIAL_SUFFIX}; open that, or "
+                        "go on with it: icewall run DECK --resume)")
             raise ResultError(f"result file {self.path} not found{hint}")
         try:
             self._f = _open(self.path)

@@ -1,7 +1,9 @@
 """Write one analysis to an HDF5 result file, step by step (layout: docs/hdf5_layout.md).
 
 The file is written as ``<path>.partial`` and flushed after every step, so a killed run leaves a
-readable file with every finished step; ``finish()`` renames it to ``<path>``.
+readable file with every finished step; ``finish()`` renames it to ``<path>``. Beside it,
+``write_checkpoint`` keeps the solver state of the last step (``<path>.checkpoint.npz``) until the
+run finishes, and ``reopen`` goes on writing an interrupted run (``icewall run --resume``).
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 import icewall
 from icewall.errors import ResultError
 from icewall.mesh.mesh import Mesh
+from icewall.results.checkpoint import checkpoint_path, remove_checkpoint, write_checkpoint
 
 FORMAT, FORMAT_VERSION = "icewall-result", 1
 PARTIAL_SUFFIX = ".partial"
@@ -26,7 +29,7 @@ INT_FILL = -1  # history value of an int column at steps where it was not given
 FLOAT_FILL = math.nan  # same for a float column (the only NaN ever written)
 RESERVED_ATTRS = ("format", "format_version", "software_version", "units", "length_unit",
                   "force_unit", "stress_unit", "created", "status", "stop_reason", "run_time_s",
-                  "n_steps")
+                  "n_steps", "resumed_at")
 # Core history columns: name -> (dtype, unit or None, description).
 CORE_COLUMNS = {
     "step": ("i8", None, "step number, 1-based"),
@@ -159,6 +162,52 @@ class ResultWriter:
             self._f.close()
             os.remove(self.partial_path)
             raise
+        remove_checkpoint(checkpoint_path(self.path))  # a stale one of an earlier run
+
+    @classmethod
+    def reopen(cls, path: str | os.PathLike, n_steps: int) -> ResultWriter:
+        """Go on writing the ``.partial`` of an interrupted run after its first `n_steps`
+        history entries; whatever it holds beyond them (a step cut short) is dropped."""
+        self = cls.__new__(cls)
+        self.path = os.fspath(path)
+        self.partial_path = self.path + PARTIAL_SUFFIX
+        check_writable(self.path)
+        try:
+            self._f = h5py.File(self.partial_path, "a")
+        except OSError as exc:
+            raise ResultError(f"cannot reopen {self.partial_path}: {exc}") from None
+        try:
+            self._truncate(n_steps)
+        except BaseException:
+            self._f.close()
+            raise
+        return self
+
+    def _truncate(self, n_steps: int) -> None:
+        f = self._f
+        hist = f["history"]
+        if not 0 <= n_steps <= int(f.attrs["n_steps"]):
+            raise ResultError(f"{self.partial_path}: cannot keep {n_steps} of "
+                              f"{int(f.attrs['n_steps'])} steps")
+        last = int(hist["step"][n_steps - 1]) if n_steps else 0
+        self._columns = {}
+        for name in list(hist):
+            if name not in CORE_COLUMNS and int(hist[name].attrs.get("first_step", 0)) > last:
+                del hist[name]  # a column that appeared in a dropped step
+                continue
+            hist[name].resize((n_steps,))
+            if name not in CORE_COLUMNS:
+                self._columns[name] = hist[name].dtype.kind == "i"
+        for group in ("steps", "forensics"):
+            for key in [k for k in f.get(group, {}) if int(k) > last]:
+                del f[group][key]
+        resumed = [int(x) for x in np.atleast_1d(f.attrs.get("resumed_at", []))]
+        f.attrs.update({"status": "running", "stop_reason": "", "n_steps": n_steps,
+                        "resumed_at": np.array(resumed + [last], dtype=np.int64)})
+        self._t0 = time.perf_counter() - float(f.attrs.get("run_time_s", 0.0))
+        self._n, self._last_step, self._done = n_steps, last, False
+        self._n_nodes, self._n_cells = f["mesh/points"].shape[0], f["mesh/cells"].shape[0]
+        f.flush()
 
     def _init_file(self, deck_text: str, deck_path: str, mesh: Mesh, attrs: dict) -> None:
         f = self._f
@@ -259,6 +308,11 @@ class ResultWriter:
         f.attrs["run_time_s"] = time.perf_counter() - self._t0
         f.flush()
 
+    def write_checkpoint(self, arrays: dict[str, np.ndarray]) -> None:
+        """Replace the restart checkpoint (``<path>.checkpoint.npz``) by `arrays`, the solver
+        state after the last written step (recorded with it as ``step``)."""
+        write_checkpoint(checkpoint_path(self.path), {**arrays, "step": self._last_step})
+
     # -- closing -----------------------------------------------------------------------------
     def finish(self, status: str = "completed", reason: str = "") -> str:
         """Record the outcome, close, and return the file's path.
@@ -276,8 +330,9 @@ class ResultWriter:
                                   "n_steps": self._n})
         finally:
             self._f.close()
-        if status == "failed":
+        if status == "failed":  # keeps the checkpoint: `icewall run --resume` goes on from it
             return self.partial_path
+        remove_checkpoint(checkpoint_path(self.path))
         os.replace(self.partial_path, self.path)
         return self.path
 

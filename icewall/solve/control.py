@@ -44,6 +44,9 @@ class PathState:
     evaluation: Evaluation | None = None
     preload_factor: float = 0.0  # fraction of the in-plane preload applied
     load_scale: float = 0.0  # largest external-load norm reached: the eq. 4.5 reference
+    # (stage, position reached, next step size, peak load factor): where _advance would go on
+    # from here; follow_path(..., resume=True) continues an interrupted run from it
+    resume: tuple = ()
 
 
 @dataclass
@@ -230,7 +233,8 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
 
 
 def _advance(problem: Problem, settings: SolverSettings, state: PathState, target, preload,
-             step_size: float, kind: str) -> Iterator[tuple[Increment, PathState]]:
+             step_size: float, kind: str, resume: tuple = ()
+             ) -> Iterator[tuple[Increment, PathState]]:
     """Reach `target` (deflection or preload fraction) from `state`, halving failed steps."""
     c = problem.constraints
     smallest = step_size / 2 ** settings.max_step_cuts * (1 + 1e-9)
@@ -238,6 +242,8 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
                else state.preload_factor)
     size = step_size
     peak_load = state.load_factor
+    if resume:
+        current, size, peak_load = resume
     while current < target - 1e-12 * max(1.0, abs(target)):
         goal = min(current + size, target)
         tic = time.perf_counter()
@@ -278,11 +284,11 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
             0.0 if problem.preload is None else inc.preload_factor * problem.preload))
         scale = max(state.load_scale, _external_force_norm(c, applied,
                                                            inc.evaluation.internal_force))
-        state = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
-                          inc.preload_factor, scale)
         current = goal
-        yield inc, state
         size = min(step_size, 2.0 * size)  # grow back after a successful cut step
+        state = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
+                          inc.preload_factor, scale, (kind, current, size, peak_load))
+        yield inc, state
 
 
 def _abrupt_drop(state: PathState, inc: Increment, peak_load: float) -> bool:
@@ -290,14 +296,17 @@ def _abrupt_drop(state: PathState, inc: Increment, peak_load: float) -> bool:
             and state.load_factor - inc.load_factor > SNAP_BACK_DROP * peak_load)
 
 
-def follow_path(problem: Problem, settings: SolverSettings,
-                initial: PathState) -> Iterator[tuple[Increment, PathState]]:
-    """Preload by load control (if any), then displacement control to the target."""
+def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,
+                resume: bool = False) -> Iterator[tuple[Increment, PathState]]:
+    """Preload by load control (if any), then displacement control to the target; `resume`
+    goes on from where `initial.resume` says (an interrupted run's last converged step)."""
     current = initial
-    if problem.preload is not None:
+    stage, start = (initial.resume[0], initial.resume[1:]) if resume else ("", ())
+    if problem.preload is not None and stage != "control":
         for inc, current in _advance(problem, settings, initial, 1.0, None,
-                                     1.0 / settings.preload_increments, "preload"):
+                                     1.0 / settings.preload_increments, "preload", start):
             yield inc, current
+        start = ()
     preload = 1.0 if problem.preload is not None else 0.0
     yield from _advance(problem, settings, current, settings.target, preload,
-                        settings.increment, "control")
+                        settings.increment, "control", start)

@@ -3,11 +3,14 @@ each converged increment reports (counts, energies, forensics)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from dataclasses import dataclass
+import functools
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, fields, replace
+from typing import Any
 
 import numpy as np
 
+from icewall.errors import ResultError
 from icewall.model.build import Model
 from icewall.model.materials import MaterialGroup, build_groups
 from icewall.model.structure import Evaluation, Structure
@@ -19,14 +22,27 @@ from icewall.solve.settings import solver_settings
 
 @dataclass(frozen=True)
 class StepReport:
-    """One converged increment with everything the result file records."""
+    """One converged increment with everything the result file records; the per-step fields
+    (displacement, interface arrays, state fields, checkpoint) are computed only when asked
+    for, and only while the generator stands at this step."""
 
     increment: Increment
     counts: dict[str, int]
     energy: dict[str, float]
-    displacement: np.ndarray  # (n_nodes, 2)
-    arrays: dict[str, np.ndarray]  # per-pair interface state etc.
     structure: Structure
+    constraints: Any
+    dof_map: Any
+    checkpoint: Callable[[], dict[str, np.ndarray]]  # full solver state, for --resume
+
+    @property
+    def displacement(self) -> np.ndarray:
+        """(n_nodes, 2) nodal displacements."""
+        return self.dof_map.expand(self.increment.u)
+
+    @property
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Per-pair interface state (empty without gap elements)."""
+        return self.constraints.arrays()
 
     def state_fields(self) -> dict[str, np.ndarray]:
         return state_fields(self.structure, self.increment.evaluation.states)
@@ -80,8 +96,10 @@ def make_constraints(model: Model, structure: Structure):
     return SupportConstraints(model.dof_map.n_equations, model.fixed)
 
 
-def run_nonlinear(model: Model) -> Iterator[StepReport]:
-    """Yield every converged increment of the deck's analysis."""
+def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
+                  ) -> Iterator[StepReport]:
+    """Yield every converged increment of the deck's analysis; with `resume` (a checkpoint of
+    an interrupted run of the same model) from the step it was taken at."""
     deck = model.deck
     groups = build_groups(deck, model.cell_material, model.gauss_spacing,
                           model.kinematics.dV.shape[1])
@@ -91,26 +109,104 @@ def run_nonlinear(model: Model) -> Iterator[StepReport]:
                       model.control_equation, lambda states: point_flags(groups, states),
                       tuple(g.freezable for g in groups))
     settings = solver_settings(deck)
-    initial = PathState(np.zeros(model.dof_map.n_equations), 0.0, structure.initial_states())
     energy = EnergyAccount()
-    previous = structure.evaluate(initial.u, initial.states)
-    previous_u, previous_load = initial.u, np.zeros_like(initial.u)
-    preload = np.zeros_like(initial.u) if model.preload is None else model.preload
-    for inc, _ in follow_path(problem, settings, initial):
+    if resume is None:
+        start = PathState(np.zeros(model.dof_map.n_equations), 0.0, structure.initial_states())
+        first = structure.evaluate(start.u, start.states)
+        stress, strain = first.stress, first.strain
+    else:
+        start, stress, strain = restore_checkpoint(resume, structure, constraints, energy)
+    preload = np.zeros_like(start.u) if model.preload is None else model.preload
+    previous_u = start.u
+    previous_load = start.load_factor * model.reference_load + start.preload_factor * preload
+    for inc, path in follow_path(problem, settings, start, resume=resume is not None):
         ev = inc.evaluation
         load = inc.load_factor * model.reference_load + inc.preload_factor * preload
         energy.add_external(previous_load, load, inc.u - previous_u)
         for group in groups:
             c = group.cells
-            energy.add_internal(group.name, previous.stress[c], ev.stress[c], previous.strain[c],
-                                ev.strain[c], structure.kinematics.dV[c])
+            energy.add_internal(group.name, stress[c], ev.stress[c], strain[c], ev.strain[c],
+                                structure.kinematics.dV[c])
         for name, value in _elastic_energy(structure, ev).items():
             energy.set_elastic(name, value)
         energy.friction_work += constraints.friction_work_increment()
         counts = {**state_counts(groups, ev.states), **constraints.counts()}
-        yield StepReport(inc, counts, energy.record(), model.dof_map.expand(inc.u),
-                         constraints.arrays(), structure)
-        previous, previous_u, previous_load = ev, inc.u, load
+        snapshot = functools.partial(take_checkpoint, path, constraints, energy)
+        yield StepReport(inc, counts, energy.record(), structure, constraints, model.dof_map,
+                         snapshot)
+        stress, strain, previous_u, previous_load = ev.stress, ev.strain, inc.u, load
+
+
+def take_checkpoint(path: PathState, constraints, energy: EnergyAccount
+                    ) -> dict[str, np.ndarray]:
+    """The full solver state after a converged step, as named arrays: path (displacements,
+    load and preload factors, eq. 4.5 reference, where the path goes on), the Gauss-point
+    states of every group, the interface pair states and the energy account."""
+    ev = path.evaluation
+    stage, position, size, peak = path.resume
+    out: dict[str, np.ndarray] = {
+        "path/u": path.u, "path/load_factor": path.load_factor,
+        "path/preload_factor": path.preload_factor, "path/load_scale": path.load_scale,
+        "path/stage": np.array(stage), "path/position": position, "path/size": size,
+        "path/peak_load": peak, "previous/stress": ev.stress, "previous/strain": ev.strain,
+        "energy/external_work": energy.external_work,
+        "energy/friction_work": energy.friction_work}
+    for kind in ("internal_work", "elastic_energy"):
+        for name, value in getattr(energy, kind).items():
+            out[f"energy/{kind}/{name}"] = value
+    for k, state in enumerate(path.states):
+        if state is not None:
+            out.update({f"group{k}/{f.name}": getattr(state, f.name) for f in fields(state)})
+    gap = getattr(constraints, "committed", None)
+    if gap is not None:
+        out.update({f"gap/{f.name}": getattr(gap, f.name) for f in fields(gap)
+                    if f.name != "transitions" and getattr(gap, f.name) is not None})
+    return {name: np.asarray(value) for name, value in out.items()}
+
+
+def restore_checkpoint(data: dict[str, np.ndarray], structure: Structure, constraints,
+                       energy: EnergyAccount) -> tuple[PathState, np.ndarray, np.ndarray]:
+    """Set `constraints` and `energy` to a checkpoint; returns the path state to go on from
+    and the stress and strain of the checkpoint's step (the start of the next increment)."""
+    try:
+        states = []
+        for k, initial in enumerate(structure.initial_states()):
+            if initial is None:
+                states.append(None)
+                continue
+            states.append(type(initial)(**{f.name: _same_shape(
+                data[f"group{k}/{f.name}"], getattr(initial, f.name), f"group{k}/{f.name}")
+                for f in fields(initial)}))
+        if getattr(constraints, "committed", None) is not None:
+            gap = constraints.committed
+            constraints.committed = replace(gap, transitions={}, **{
+                f.name: _same_shape(data[f"gap/{f.name}"], getattr(gap, f.name), f.name)
+                for f in fields(gap) if f.name != "transitions"
+                and getattr(gap, f.name) is not None})
+            constraints.state = constraints.committed
+        energy.external_work = float(data["energy/external_work"])
+        energy.friction_work = float(data["energy/friction_work"])
+        for name, value in data.items():
+            kind, _, group = name.removeprefix("energy/").partition("/")
+            if name.startswith("energy/") and group:
+                getattr(energy, kind)[group] = float(value)
+        u = _same_shape(data["path/u"], np.zeros(structure.assembler.n_dofs), "path/u")
+        resume = (str(data["path/stage"]), float(data["path/position"]),
+                  float(data["path/size"]), float(data["path/peak_load"]))
+        path = PathState(u, float(data["path/load_factor"]), tuple(states), None,
+                         float(data["path/preload_factor"]), float(data["path/load_scale"]),
+                         resume)
+        return path, data["previous/stress"], data["previous/strain"]
+    except KeyError as exc:
+        raise ResultError(f"the checkpoint lacks {exc.args[0]!r}: not one of this model") from None
+
+
+def _same_shape(value: np.ndarray, like, name: str) -> np.ndarray:
+    like = np.asarray(like)
+    if value.shape != like.shape:
+        raise ResultError(f"the checkpoint's {name} has shape {value.shape}, the model's "
+                          f"{like.shape}: it is not a checkpoint of this model")
+    return value.astype(like.dtype, copy=True)
 
 
 def state_fields(structure: Structure, states) -> dict[str, np.ndarray]:

@@ -1,0 +1,174 @@
+"""`icewall run --resume`: an interrupted run goes on from its last converged step and ends
+with the same result, to the last bit, as a run that was never interrupted."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from icewall.cli import main
+from icewall.deck.load import load_deck
+from icewall.errors import Interrupted, ResultError
+from icewall.pipeline import run_deck
+from icewall.results.checkpoint import checkpoint_path
+from icewall.results.reader import open_result
+from icewall.results.writer import ResultWriter
+
+DECKS = Path(__file__).resolve().parents[2] / "decks"
+FIELDS = "outputs.fields=[displacement, stress, strain, state]"
+CF4_SMALL = ["analysis.element_size=150", "loads.control.target=5", FIELDS]
+TF1_SMALL = ["analysis.element_size=150", "loads.control.target=3", FIELDS]
+
+
+def _interrupt_after(k: int):
+    """A progress callback that stops the run like SIGINT right after step k is written."""
+    seen = []
+
+    def say(message: str) -> None:
+        if message.lstrip().startswith("step"):
+            seen.append(message)
+            if len(seen) == k:
+                raise Interrupted("SIGINT", 130)
+
+    return say
+
+
+def assert_identical(path_a: str, path_b: str) -> None:
+    """Same history (but wall time) and same stored arrays, bit for bit."""
+    with open_result(path_a) as a, open_result(path_b) as b:
+        assert a.status == b.status and a.attrs["stop_reason"] == b.attrs["stop_reason"]
+        assert sorted(a.history) == sorted(b.history)
+        for name in a.history:
+            if name != "wall_time":
+                np.testing.assert_array_equal(a.history[name], b.history[name], err_msg=name)
+        assert a.steps == b.steps
+    with h5py.File(path_a, "r") as fa, h5py.File(path_b, "r") as fb:
+        for group in ("steps", "forensics"):
+            names = _datasets(fa[group])
+            assert names
+            for name in names:
+                np.testing.assert_array_equal(fa[group][name][()], fb[group][name][()],
+                                              err_msg=f"{group}/{name}")
+
+
+def _datasets(group: h5py.Group) -> list[str]:
+    names: list[str] = []
+    group.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
+    return names
+
+
+@pytest.fixture(scope="module")
+def cf4_uninterrupted(tmp_path_factory):
+    loaded = load_deck(DECKS / "cf4.yaml", CF4_SMALL)
+    return loaded, run_deck(loaded, tmp_path_factory.mktemp("whole") / "cf4.h5")
+
+
+def test_resume_ends_bit_identical(cf4_uninterrupted, tmp_path):
+    loaded, whole = cf4_uninterrupted
+    assert whole.status == "completed" and whole.n_steps == 5
+    out = tmp_path / "cf4.h5"
+    with pytest.raises(Interrupted):
+        run_deck(loaded, out, progress=_interrupt_after(2))
+    with open_result(str(out) + ".partial") as res:
+        assert res.status == "failed" and res.attrs["stop_reason"] == "interrupted by SIGINT"
+        assert len(res.history["step"]) == 2
+    assert os.path.exists(checkpoint_path(out))
+    resumed = run_deck(loaded, out, resume=True)
+    assert resumed.status == "completed" and resumed.n_steps == 5
+    assert_identical(whole.path, resumed.path)
+    with open_result(resumed.path) as res:
+        assert res.attrs["resumed_at"] == [2]
+    assert not os.path.exists(checkpoint_path(out))  # a finished run keeps no checkpoint
+
+
+def test_resume_when_killed_between_the_step_and_its_checkpoint(cf4_uninterrupted, tmp_path,
+                                                                monkeypatch):
+    loaded, whole = cf4_uninterrupted
+    out = tmp_path / "cf4.h5"
+    real = ResultWriter.write_checkpoint
+
+    def stop_at_step_3(self, arrays):
+        if self._last_step == 3:  # step 3 is in the file, its checkpoint not yet
+            raise Interrupted("SIGTERM", 143)
+        real(self, arrays)
+
+    monkeypatch.setattr(ResultWriter, "write_checkpoint", stop_at_step_3)
+    with pytest.raises(Interrupted):
+        run_deck(loaded, out)
+    monkeypatch.undo()
+    with open_result(str(out) + ".partial") as res:
+        assert len(res.history["step"]) == 3
+    resumed = run_deck(loaded, out, resume=True)  # drops step 3 and computes it again
+    assert_identical(whole.path, resumed.path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k", [2, 5, 6])  # in the preload stage, at its end, after it
+def test_resume_through_the_preload_stage(tmp_path, k):
+    loaded = load_deck(DECKS / "tf1.yaml", TF1_SMALL)
+    whole = run_deck(loaded, tmp_path / "whole" / "tf1.h5")
+    out = tmp_path / "cut" / "tf1.h5"
+    with pytest.raises(Interrupted):
+        run_deck(loaded, out, progress=_interrupt_after(k))
+    assert_identical(whole.path, run_deck(loaded, out, resume=True).path)
+
+
+@pytest.mark.slow
+def test_resume_after_sigkill(tmp_path):
+    """A real kill -9 at an arbitrary moment: the partial file and checkpoint on disk are enough
+    to end with the uninterrupted result."""
+    overrides = CF4_SMALL + ["loads.control.increment=0.25"]  # 20 steps: time to kill it
+    whole = run_deck(load_deck(DECKS / "cf4.yaml", overrides), tmp_path / "whole" / "cf4.h5")
+    out = tmp_path / "cf4.h5"
+    args = ["run", str(DECKS / "cf4.yaml"), "-o", str(out), "-q"]
+    for assignment in overrides:
+        args += ["--set", assignment]
+    proc = subprocess.Popen([sys.executable, "-c", "from icewall.cli import main; main()",
+                             *args])
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:
+        if os.path.exists(checkpoint_path(out)):
+            try:
+                with open_result(str(out) + ".partial") as res:
+                    if len(res.history["step"]) >= 2:
+                        break
+            except ResultError:
+                pass
+        time.sleep(0.05)
+    assert proc.poll() is None, "the run ended before it could be killed"
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=60)
+    result = CliRunner().invoke(main, [*args, "--resume"])
+    assert result.exit_code == 0, result.output
+    assert_identical(whole.path, str(out))
+
+
+def test_resume_refuses_what_it_cannot_continue(cf4_uninterrupted, tmp_path):
+    loaded, whole = cf4_uninterrupted
+    with pytest.raises(ResultError, match="the run finished"):
+        run_deck(loaded, whole.path, resume=True)
+    with pytest.raises(ResultError, match="nothing to resume"):
+        run_deck(loaded, tmp_path / "never.h5", resume=True)
+    out = tmp_path / "cf4.h5"
+    with pytest.raises(Interrupted):
+        run_deck(loaded, out, progress=_interrupt_after(1))
+    other = load_deck(DECKS / "cf4.yaml", CF4_SMALL + ["materials.concrete.fc=40"])
+    with pytest.raises(ResultError, match="other --set overrides"):
+        run_deck(other, out, resume=True)
+
+
+def test_cli_resume_error_is_one_line_exit_2(tmp_path):
+    result = CliRunner().invoke(main, ["run", str(DECKS / "cf4.yaml"), "-o",
+                                       str(tmp_path / "x.h5"), "--resume"])
+    assert result.exit_code == 2
+    assert result.output.startswith("error: nothing to resume")
+    assert "Traceback" not in result.output and result.output.count("\n") == 1
