@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DECK ?= decks/cf4.yaml
 
-.PHONY: run test lint stability validate compare convergence bench schema clean
+.PHONY: run test lint stability validate compare convergence cylinder bench schema clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -44,8 +44,19 @@ convergence: $(VENV)/.plot  ## CF-4 and TF-1 over a discretisation ladder (long)
 	$(BIN)/icewall convergence decks/cf4.yaml -j 2 -o results/convergence/cf4
 	$(BIN)/icewall convergence decks/tf1.yaml -j 2 -o results/convergence/tf1
 
-bench: $(STAMP)  ## benchmarks, outside the test suite
+cylinder: $(STAMP)  ## thesis Appendix A: 24 axisymmetric cylinders, fit of alpha_c, n (long)
+	$(BIN)/python -m icewall.analysis.cylinder -j 2 -o results/cylinder
+
+PEERS_VENV ?= $(HOME)/.cache/bench-peers-venv
+
+bench: $(STAMP)  ## benchmarks, outside the test suite; tables printed, CSV in benchmarks/out
 	$(BIN)/python benchmarks/bench_concrete.py
+	$(BIN)/python benchmarks/bench_iteration.py
+	$(BIN)/python benchmarks/bench_scaling.py --backends superlu superlu:COLAMD
+	ICEWALL_SPARSE_SOLVER=auto ICEWALL_SUPERLU_ORDERING=COLAMD $(BIN)/python \
+	    benchmarks/bench_scaling.py --backends superlu:COLAMD --csv scaling_fast.csv
+	test -x $(PEERS_VENV)/bin/python || bash ../shared/bench-peers/setup_venv.sh $(PEERS_VENV)
+	$(BIN)/python benchmarks/bench_peers.py --peers-python $(PEERS_VENV)/bin/python
 
 schema: $(STAMP)  ## regenerate the published JSON Schema of the deck format
 	$(BIN)/icewall schema -o docs/deck.schema.json

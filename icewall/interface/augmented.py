@@ -16,19 +16,15 @@ here, never scaled by the load factor), both on one factorisation.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from icewall.errors import ConvergenceError
 from icewall.interface.gap import FIXED, FREE, SLIP, GapState, relative_displacement, slip_force
+from icewall.solve.constraints import restricted_matrix
+from icewall.solve.sparse import SingularMatrixError, SparseLU
+from icewall.solve.sparse import factorize as sparse_factorize
 
-# Same ordering options as icewall.solve.linear; threshold pivoting picks an off-diagonal
-# pivot for the zero diagonal of the multiplier block.
-SPLU_OPTIONS = {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 1e-3,
-                "options": {"SymmetricMode": True}}
 # |U_jj| below this fraction of the largest entry of column j marks a singular system
 # (a floating core gives ~1e-16).
 PIVOT_RTOL = 1e-12
@@ -90,27 +86,35 @@ def augmented_matrix(K: sp.spmatrix, C: sp.spmatrix, state: GapState,
     SLIP pair is the Coulomb condition itself, dlam_T + s mu dlam_N = -(lam_T + s mu lam_N)
     with s = sign(lam_T) (so lam_T = s mu |lam_N| with lam_N < 0 holds at once instead of
     lagging one iteration behind lam_N); A is then unsymmetric.
+
+    [[K_r, C_u^T], [C_a, D]] in canonical CSC without stored zeros, built in one pass from
+    column-major entry lists (a stable sort by column keeps the rows ascending).
     """
     n_eq = K.shape[0]
     fixed = _fixed_mask(n_eq, fixed_equations)
-    free_eq = sp.diags((~fixed).astype(float))
-    K_r = free_eq @ sp.csr_matrix(K) @ free_eq + sp.diags(fixed.astype(float))
     active = active_rows(state)
-    C_a = sp.diags(active.astype(float)) @ sp.csr_matrix(C) @ free_eq
-    if not implicit_slip:
-        A = sp.bmat([[K_r, C_a.T], [C_a, sp.diags((~active).astype(float))]], format="csc")
-        A.eliminate_zeros()
-        return A
-    slip_T = implicit_slip_rows(state)
-    C_u = sp.diags((active | slip_T).astype(float)) @ sp.csr_matrix(C) @ free_eq
-    n = state.n_pairs
-    slip = np.flatnonzero(state.state == SLIP)
-    coupling = sp.csr_matrix((np.sign(state.lam_T[slip]) * mu, (2 * slip + 1, 2 * slip)),
-                             shape=(2 * n, 2 * n))
-    D = sp.diags((~active).astype(float)) + coupling
-    A = sp.bmat([[K_r, C_u.T], [C_a, D]], format="csc")
-    A.eliminate_zeros()
-    return A
+    upper = active | implicit_slip_rows(state) if implicit_slip else active
+    C_csc, C_csr = sp.csc_matrix(C), sp.csr_matrix(C)
+    # C_a = diag(active) C diag(free): column j of A holds C's column j below K_r's
+    a_cols = np.repeat(np.arange(n_eq), np.diff(C_csc.indptr))
+    a_keep = active[C_csc.indices] & ~fixed[a_cols]
+    # C_u^T: column n_eq + r of A holds C's row r above the multiplier block
+    u_rows = np.repeat(np.arange(C_csr.shape[0]), np.diff(C_csr.indptr))
+    u_keep = upper[u_rows] & ~fixed[C_csr.indices]
+    inactive = np.flatnonzero(~active)
+    slip = np.flatnonzero(state.state == SLIP) if implicit_slip else np.zeros(0, dtype=int)
+    K_r = restricted_matrix(K, fixed)  # column-major, rows ascending
+    k_rows, k_cols = K_r.indices, np.repeat(np.arange(n_eq), np.diff(K_r.indptr))
+    k_values = K_r.data
+    rows = np.concatenate([k_rows, n_eq + C_csc.indices[a_keep], C_csr.indices[u_keep],
+                           n_eq + inactive, n_eq + 2 * slip + 1])
+    cols = np.concatenate([k_cols, a_cols[a_keep], n_eq + u_rows[u_keep], n_eq + inactive,
+                           n_eq + 2 * slip])
+    values = np.concatenate([k_values, C_csc.data[a_keep], C_csr.data[u_keep],
+                             np.ones(inactive.size), np.sign(state.lam_T[slip]) * mu])
+    stored = values != 0.0
+    m = n_eq + C_csr.shape[0]
+    return sp.csc_matrix((values[stored], (rows[stored], cols[stored])), shape=(m, m))
 
 
 def augmented_rhs(r_u: np.ndarray, u: np.ndarray, C: sp.spmatrix, state: GapState, mu: float,
@@ -159,9 +163,9 @@ def interface_forces(C: sp.spmatrix, state: GapState) -> np.ndarray:
 class AugmentedFactor:
     """LU factors of an augmented matrix; `solve` takes one (m,) or several (m, k) RHS."""
 
-    def __init__(self, A: sp.csc_matrix, lu: spla.SuperLU) -> None:
+    def __init__(self, A: sp.csc_matrix, lu: SparseLU) -> None:
         self.A, self.lu = A, lu
-        self.norm_A = float(abs(A).max())
+        self.norm_A = float(np.abs(A.data).max(initial=0.0))
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         b = np.asarray(rhs, dtype=float)
@@ -176,23 +180,29 @@ class AugmentedFactor:
         return x
 
 
-def factorize(A: sp.spmatrix) -> AugmentedFactor:
-    """splu of the augmented matrix; ConvergenceError(reason="singular system") when singular."""
+def column_max_abs(A: sp.csc_matrix) -> np.ndarray:
+    """max_i |A_ij| per column j (zero for an empty column)."""
+    counts = np.diff(A.indptr)
+    if A.nnz == 0:
+        return np.zeros(A.shape[1])
+    starts = np.minimum(A.indptr[:-1], A.nnz - 1)
+    return np.where(counts > 0, np.maximum.reduceat(np.abs(A.data), starts), 0.0)
+
+
+def factorize(A: sp.spmatrix, backend: str | None = None) -> AugmentedFactor:
+    """LU of the augmented matrix (icewall.solve.sparse; SuperLU unless chosen otherwise);
+    ConvergenceError(reason="singular system") when singular."""
     A = sp.csc_matrix(A)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", spla.MatrixRankWarning)
-        try:
-            lu = spla.splu(A, **SPLU_OPTIONS)
-        except (RuntimeError, spla.MatrixRankWarning) as exc:
-            raise ConvergenceError(f"augmented interface system is singular ({exc}); "
+    A.sum_duplicates()
+    try:
+        lu = sparse_factorize(A, backend, pivot_scale=column_max_abs(A), pivot_rtol=PIVOT_RTOL)
+    except SingularMatrixError as exc:
+        if exc.columns.size:
+            where = np.sort(exc.columns)[:10].tolist()
+            raise ConvergenceError(f"augmented interface system is singular ({exc.columns.size}"
+                                   f" near-zero pivot(s) near unknown(s) {where}; displacement "
+                                   f"equations come first, node = eq // 2 without ties); "
                                    f"{SINGULAR_HINT}", reason="singular system") from exc
-    column = np.argsort(lu.perm_c)  # column j of L U is column perm_c^-1[j] of A
-    column_max = np.asarray(abs(A).max(axis=0).todense()).ravel()
-    small = np.abs(lu.U.diagonal()) <= PIVOT_RTOL * column_max[column]
-    if np.any(small):
-        where = np.sort(column[small])[:10].tolist()
-        raise ConvergenceError(f"augmented interface system is singular ({small.sum()} "
-                               f"near-zero pivot(s) near unknown(s) {where}; displacement "
-                               f"equations come first, node = eq // 2 without ties); "
-                               f"{SINGULAR_HINT}", reason="singular system")
+        raise ConvergenceError(f"augmented interface system is singular ({exc}); "
+                               f"{SINGULAR_HINT}", reason="singular system") from exc
     return AugmentedFactor(A, lu)

@@ -9,29 +9,51 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from icewall.errors import ConvergenceError
+from icewall.solve.sparse import SingularMatrixError, factorize
 
 
 class Factorization:
-    """Sparse LU of one iteration matrix; `solve` takes (n,) or (n, k) right-hand sides."""
+    """Sparse LU of one iteration matrix (icewall.solve.sparse); `solve` takes (n,) or (n, k)
+    right-hand sides."""
 
-    def __init__(self, A: sp.spmatrix, hint: str = "") -> None:
+    def __init__(self, A: sp.spmatrix, hint: str = "", backend: str | None = None) -> None:
         try:
-            self._lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A",
-                                 options={"SymmetricMode": True},
-                                 diag_pivot_thresh=1e-3)
-        except RuntimeError as exc:
+            self._lu = factorize(A, backend)
+        except SingularMatrixError as exc:
             raise ConvergenceError(f"singular system ({exc}){hint}",
                                    reason="singular system") from None
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        x = self._lu.solve(np.asarray(rhs, dtype=float))
-        if not np.all(np.isfinite(x)):
+        b = np.asarray(rhs, dtype=float)
+        x = self._lu.solve(b)
+        # SuperLU reports exact singularity itself; the others need the residual check
+        if not np.all(np.isfinite(x)) or not (self._lu.backend == "superlu"
+                                              or self._lu.accurate(b, x)):
             raise ConvergenceError("the linear solve gave non-finite values (singular or "
                                    "badly conditioned system)", reason="singular system")
         return x
+
+
+def restricted_matrix(K: sp.spmatrix, fixed: np.ndarray) -> sp.csc_matrix:
+    """K with the rows and columns of `fixed` replaced by identity ones, canonical CSC without
+    stored zeros (bit for bit diag(free) K diag(free) + diag(fixed))."""
+    K = sp.csc_matrix(K, copy=True)
+    K.sum_duplicates()
+    is_fixed = np.zeros(K.shape[0], dtype=bool)
+    is_fixed[fixed] = True
+    cols = np.repeat(np.arange(K.shape[1]), np.diff(K.indptr))
+    rows = K.indices
+    K.data[is_fixed[rows] | is_fixed[cols]] = 0.0
+    diagonal = np.flatnonzero((rows == cols) & is_fixed[cols])
+    K.data[diagonal] = 1.0
+    if diagonal.size < np.count_nonzero(is_fixed):  # a fixed equation outside K's pattern
+        missing = is_fixed.copy()
+        missing[cols[diagonal]] = False
+        K = K + sp.diags(missing.astype(float), format="csc")
+    K.eliminate_zeros()
+    return K
 
 
 class SupportConstraints:
@@ -42,10 +64,6 @@ class SupportConstraints:
     def __init__(self, n_equations: int, fixed: np.ndarray) -> None:
         self.n_equations = n_equations
         self.fixed = np.asarray(fixed, dtype=int)
-        free = np.ones(n_equations)
-        free[self.fixed] = 0.0
-        self._free = sp.diags(free)
-        self._fixed_identity = sp.diags(1.0 - free)
 
     # --- state over a step -------------------------------------------------------------
     def begin_step(self) -> None:
@@ -70,8 +88,8 @@ class SupportConstraints:
 
     def factorize(self, K: sp.spmatrix) -> Factorization:
         """Factorisation of the iteration matrix for the current constraint states."""
-        A = self._free @ K @ self._free + self._fixed_identity
-        return Factorization(A, " - a rigid-body mode is not restrained: check supports")
+        return Factorization(restricted_matrix(K, self.fixed),
+                             " - a rigid-body mode is not restrained: check supports")
 
     def reference_rhs(self, reference: np.ndarray) -> np.ndarray:
         """RHS of eq. 3.46: R* on the free equations, zero in any multiplier rows (errata §3)."""
