@@ -153,8 +153,10 @@ def _external_force_norm(constraints, applied: np.ndarray, internal: np.ndarray)
 
 
 def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
-             target_deflection: float | None, preload_factor: float) -> Increment:
-    """Iterate one increment to convergence. target_deflection None means load control."""
+             target_deflection: float | None, preload_factor: float,
+             damp_cycles: bool = True) -> Increment:
+    """Iterate one increment to convergence. target_deflection None means load control;
+    damp_cycles False lets the relaxation grow back to its full limit after every rise."""
     s, c = problem.structure, problem.constraints
     u, P = start.u.copy(), start.load_factor
     R = c.restrict(problem.reference_load)
@@ -219,7 +221,8 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
         rises += iteration >= 3 and load_norm > previous_load_norm
         relaxation = _relaxation(settings.acceleration, iteration, relaxation, du,
                                  previous_correction, load_norm, previous_load_norm,
-                                 _growth_limit(settings.max_relaxation, rises))
+                                 _growth_limit(settings.max_relaxation,
+                                               rises if damp_cycles else 0))
         previous_correction, previous_load_norm = du, load_norm
         # (multipliers are not relaxed: prescribed ones, e.g. zero on open pairs, stay exact)
         du, dP = relaxation * du, relaxation * dP
@@ -244,17 +247,23 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
     peak_load = state.load_factor
     if resume:
         current, size, peak_load = resume
+    damp_cycles = True
     while current < target - 1e-12 * max(1.0, abs(target)):
         goal = min(current + size, target)
         tic = time.perf_counter()
         try:
             if kind == "control":
-                inc = _iterate(problem, settings, state, goal, preload)
+                inc = _iterate(problem, settings, state, goal, preload, damp_cycles)
             else:
-                inc = _iterate(problem, settings, state, None, goal)
+                inc = _iterate(problem, settings, state, None, goal, damp_cycles)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
             reason = getattr(exc, "reason", "non-convergence")
+            if size <= smallest and damp_cycles and reason == "non-convergence":
+                # the damped relaxation can also crawl where the undamped one gets through:
+                # retry the smallest step once without it before giving up
+                damp_cycles = False
+                continue
             if size <= smallest:
                 raise ConvergenceError(f"{exc} at {kind} {goal:.4g} after "
                                        f"{settings.max_step_cuts} step cuts",
@@ -273,6 +282,7 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
             size = 0.5 * size
             continue
         c.commit()
+        damp_cycles = True
         inc.snap_back = bool(snap)  # accepted load drop (on_snap_back: continue)
         if snap:
             log.info("snap-back at %.4g mm accepted: load %.4g -> %.4g", goal,
