@@ -116,7 +116,7 @@ def test_quad4_and_element_size_control_the_mesh():
     _, coarse = _mesh("cf4.yaml", "analysis.element=quad4")
     assert coarse.cells.shape[1] == 4
     _, fine = _mesh("cf4.yaml", "analysis.element_size=25")
-    _, base = _mesh("cf4.yaml")
+    _, base = _mesh("cf4.yaml", "analysis.element_size=75")
     assert fine.n_cells > 4 * base.n_cells
     core = fine.cells_of_kind(CONCRETE)
     pts = fine.points[fine.cells[core][:, :4]]
