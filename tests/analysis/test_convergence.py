@@ -173,7 +173,7 @@ def test_quick_ladder_end_to_end(tmp_path, monkeypatch):
     """CF-4 to 4 mm: element size 150/75 and increment 2/1 mm (3 runs, the base shared)."""
     out = tmp_path / "conv"
     args = ["convergence", CF4, "--quick", "-o", str(out), "--set", "loads.control.target=4",
-            "--set", "loads.control.increment=1", "-q"]
+            "--set", "loads.control.increment=1", "--set", "analysis.element_size=75", "-q"]
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 0, result.output
     with open(out / "convergence_runs.csv", newline="") as f:
@@ -207,7 +207,8 @@ def test_quick_ladder_end_to_end(tmp_path, monkeypatch):
     lines: list[str] = []
     code = cv.convergence_command(CF4, quick=True, outdir=str(out), echo=lines.append,
                                   overrides=["loads.control.target=4",
-                                             "loads.control.increment=1"])
+                                             "loads.control.increment=1",
+                                             "analysis.element_size=75"])
     assert code == 0 and (out / "convergence_runs.csv").exists()
     text = "\n".join(lines)
     assert text.count("skipped (completed earlier)") == 3
