@@ -1,0 +1,245 @@
+"""The standard concrete cylinder of the thesis' Appendix A, axisymmetric, under platen control.
+
+Quarter model (the thesis gives no size; specimens.md: take the standard 150 x 300 mm
+cylinder): 0 <= r <= 75 (x), 0 <= z <= 150 (y), mid-height plane at z = 0. Supports: u_r = 0
+on the axis, u_z = 0 on the mid-height plane. The loaded end is the rigid loading head of
+Fig. A.4: all its nodes share one u_z equation (the control equation, "constrained to move as a
+straight line"); with ``platen="fixed"`` u_r = 0 there too ("fixed to reflect no slip"),
+``"frictionless"`` leaves u_r free (the uniform-stress verification case).
+
+The model runs through the wall analyses' machinery unchanged: the concrete group of
+`icewall.model.materials.build_groups` (thesis law; deck fields as in `Concrete`), `Structure`
+and `icewall.solve.control.follow_path` (displacement control, eqs. 3.44-3.50). Its result is
+the average stress P / (pi R^2) against the average strain delta / (H / 2), compression > 0.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from icewall.deck.schema import Analysis, Concrete, Control, Interface
+from icewall.errors import ConvergenceError
+from icewall.fem.assembly import Assembler
+from icewall.fem.kinematics import element_kinematics, gauss_point_spacing
+from icewall.fem.quadrature import gauss_rule
+from icewall.mesh.mesh import CONCRETE, Mesh
+from icewall.mesh.structured import rectangle_mesh
+from icewall.model.materials import build_groups
+from icewall.model.structure import Structure
+from icewall.solve.constraints import SupportConstraints
+from icewall.solve.control import PathState, Problem, follow_path
+from icewall.solve.nonlinear import point_flags
+from icewall.solve.settings import solver_settings
+
+DIAMETER = 150.0  # mm, standard cylinder (specimens.md; the thesis gives no size)
+HEIGHT = 300.0  # mm
+GAUSS = 3  # 3 x 3 Gauss rule of quad8, as in the wall analyses
+
+
+@dataclass(frozen=True)
+class CylinderCase:
+    """One analysis: f'c (MPa), nx x ny quad8 over the quarter, input descending area A_cd
+    (MPa; k_c = f'c / A_cd, eq. 3.27 corrected; None keeps eq. 3.34), platen condition and
+    further `Concrete` deck fields (e.g. {"model": "elastic"})."""
+
+    fc: float
+    nx: int
+    ny: int
+    input_area: float | None = None
+    platen: str = "fixed"  # fixed (no slip, Fig. A.4) | frictionless
+    concrete: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def axial_spacing(self) -> float:
+        """Gauss-point spacing along the axis, (H/2) / (3 ny), mm."""
+        return 0.5 * HEIGHT / (GAUSS * self.ny)
+
+
+@dataclass(frozen=True)
+class _Materials:
+    concrete: Concrete
+    interface: Interface = Interface()
+
+
+@dataclass(frozen=True)
+class _Loads:
+    control: Control
+
+
+@dataclass(frozen=True)
+class CylinderDeck:
+    """The parts of a wall deck that `build_groups` and `solver_settings` read."""
+
+    materials: _Materials
+    analysis: Analysis
+    loads: _Loads
+
+
+class PlatenNumbering:
+    """Equations of the quarter mesh: two per node, one u_z shared by the loading head."""
+
+    def __init__(self, n_nodes: int, head: np.ndarray) -> None:
+        eq = np.arange(2 * n_nodes).reshape(n_nodes, 2)
+        eq[head, 1] = eq[head[0], 1]
+        _, compact = np.unique(eq, return_inverse=True)
+        self.node_equations = compact.reshape(n_nodes, 2)
+        self.n_equations = int(compact.max()) + 1
+
+    def element_dofs(self, cells: np.ndarray) -> np.ndarray:
+        return self.node_equations[np.asarray(cells)].reshape(len(cells), -1)
+
+    def equations(self, nodes: np.ndarray, direction: int) -> np.ndarray:
+        return self.node_equations[np.asarray(nodes, dtype=int), direction]
+
+
+@dataclass(frozen=True)
+class CylinderModel:
+    """The assembled quarter cylinder and the problem `follow_path` solves."""
+
+    case: CylinderCase
+    deck: CylinderDeck
+    mesh: Mesh
+    numbering: PlatenNumbering
+    structure: Structure
+    problem: Problem
+    gauss_spacing: np.ndarray  # (n_el,) h_c of eq. 4.3
+
+    @property
+    def area(self) -> float:
+        return math.pi * (0.5 * DIAMETER) ** 2
+
+
+def cylinder_deck(case: CylinderCase, increment: float = 0.01, target: float = 1.0,
+                  **analysis: Any) -> CylinderDeck:
+    """Concrete, analysis (axisymmetric quad8, 3x3; `analysis` overrides) and control."""
+    concrete = dict(case.concrete)
+    if case.input_area is not None:
+        concrete["k_c"] = case.fc / case.input_area  # A_cd = sigma_c / k_c (3.27, errata)
+    return CylinderDeck(
+        materials=_Materials(Concrete(fc=case.fc, **concrete)),
+        analysis=Analysis(formulation="axisymmetric", element="quad8", gauss=GAUSS, **analysis),
+        loads=_Loads(Control(increment=increment, target=target)))
+
+
+def build_cylinder(case: CylinderCase, **analysis: Any) -> CylinderModel:
+    """Mesh, equations, concrete group and the displacement-control problem of `case`."""
+    if case.platen not in ("fixed", "frictionless"):
+        raise ValueError(f"platen must be 'fixed' or 'frictionless', got {case.platen!r}")
+    deck = cylinder_deck(case, **analysis)
+    mesh = rectangle_mesh(0.0, 0.5 * DIAMETER, 0.0, 0.5 * HEIGHT, case.nx, case.ny, "quad8",
+                          region_name="concrete", kind=CONCRETE)
+    head = mesh.node_sets["top"]
+    numbering = PlatenNumbering(mesh.n_nodes, head)
+    kin = element_kinematics(mesh.points, mesh.cells, "quad8", gauss_rule(GAUSS),
+                             "axisymmetric", 1.0, numbering)
+    spacing = gauss_point_spacing(mesh.points, mesh.cells, GAUSS)
+    groups = build_groups(deck, np.full(mesh.n_cells, "concrete"), spacing, GAUSS * GAUSS)
+    structure = Structure(kin, Assembler(kin.dofs, numbering.n_equations), groups)
+    fixed = [numbering.equations(mesh.node_sets["left"], 0),  # axis: u_r = 0
+             numbering.equations(mesh.node_sets["bottom"], 1)]  # mid-height: u_z = 0
+    if case.platen == "fixed":
+        fixed.append(numbering.equations(head, 0))  # no slip under the loading head
+    platen = int(numbering.equations(head[:1], 1)[0])
+    reference = np.zeros(numbering.n_equations)
+    reference[platen] = -1.0  # unit downward head force: the load factor is the force P (N)
+    problem = Problem(structure, SupportConstraints(numbering.n_equations,
+                                                    np.unique(np.concatenate(fixed))),
+                      reference, None, platen, lambda states: point_flags(groups, states),
+                      tuple(g.freezable for g in groups))
+    return CylinderModel(case, deck, mesh, numbering, structure, problem, spacing)
+
+
+@dataclass(frozen=True)
+class CylinderCurve:
+    """Average stress-strain response of one analysis (compression positive)."""
+
+    strain: np.ndarray  # (m,) head displacement / (H/2), row 0 the origin
+    stress: np.ndarray  # (m,) head force / (pi R^2), MPa
+    iterations: np.ndarray  # (m,) per increment
+    snap_throughs: int  # load drops accepted at the smallest step (analysis.on_snap_back)
+    jumps: int  # non-converged increments stepped over (run_cylinder's jumps)
+    stopped: str  # "" or why the solver stopped early
+    run_time: float  # s
+    gauss_stress: np.ndarray  # (n_el, nq, 4) at the last step
+    displacement: np.ndarray  # (n_nodes, 2) at the last step
+
+    @property
+    def peak_index(self) -> int:
+        return int(np.argmax(self.stress))
+
+    @property
+    def peak_stress(self) -> float:
+        return float(self.stress[self.peak_index])
+
+    @property
+    def strain_at_peak(self) -> float:
+        return float(self.strain[self.peak_index])
+
+    def descending_area(self) -> float:
+        """A_c to the last point: trapezoids under the curve from the peak (MPa)."""
+        k = self.peak_index
+        s, e = self.stress[k:], self.strain[k:]
+        return float(np.sum(0.5 * (s[1:] + s[:-1]) * np.diff(e)))
+
+    def tail_area(self, fraction: float = 0.2) -> float:
+        """Area beyond the last point for an exponential tail sigma_end / lambda, lambda the
+        log-slope of the last `fraction` of the descending strain range (MPa; 0 if the curve
+        does not decay there)."""
+        k = self.peak_index
+        e, s = self.strain[k:], self.stress[k:]
+        tail = (e >= e[-1] - fraction * (e[-1] - e[0])) & (s > 0.0)
+        if e.size < 3 or tail.sum() < 2 or s[-1] <= 0.0:
+            return 0.0
+        slope = -np.polyfit(e[tail], np.log(s[tail]), 1)[0]
+        return float(s[-1] / slope) if slope > 0.0 else 0.0
+
+
+def run_cylinder(case: CylinderCase, stages: tuple[tuple[float, float], ...] = ((0.003, 1e-4),),
+                 end_stress_ratio: float = 0.0, jumps: int = 0, jump_factor: float = 10.0,
+                 **analysis: Any) -> CylinderCurve:
+    """Drive the head through `stages` of (average strain reached, strain increment).
+
+    An increment that does not converge even after the step cuts is retried, up to `jumps`
+    times, as one `jump_factor` times larger step from the last converged state (a step over
+    a local snap-through that displacement control cannot follow); then the stage goes on.
+    Stops after the peak once the average stress falls below `end_stress_ratio` times the
+    peak, at the end of the last stage, or when the solver stops (`stopped` says why)."""
+    half = 0.5 * HEIGHT
+    model = build_cylinder(case, **analysis)
+    state = PathState(np.zeros(model.numbering.n_equations), 0.0,
+                      model.structure.initial_states())
+    strain, stress, iterations, snaps, jumped = [0.0], [0.0], [0], 0, 0
+    stopped, tic, done = "", time.perf_counter(), False
+    legs = list(stages)
+    while legs and not (stopped or done):
+        target, step = legs.pop(0)
+        settings = replace(solver_settings(model.deck), increment=step * half,
+                           target=target * half)
+        try:
+            for inc, reached in follow_path(model.problem, settings, state):
+                state = reached
+                strain.append(inc.control_displacement / half)
+                stress.append(inc.load_factor / model.area)
+                iterations.append(inc.iterations)
+                snaps += int(inc.snap_back)
+                done = stress[-1] < end_stress_ratio * max(stress)
+                if done:
+                    break
+        except ConvergenceError as exc:
+            if jumped < jumps and exc.reason == "non-convergence":
+                jumped += 1
+                jump = jump_factor * step
+                legs[:0] = [(strain[-1] + jump, jump), (target, step)]
+            else:
+                stopped = f"{exc.reason}: {exc}"
+    last = state.evaluation
+    return CylinderCurve(
+        np.array(strain), np.array(stress), np.array(iterations), snaps, jumped, stopped,
+        time.perf_counter() - tic,
+        gauss_stress=np.zeros((0, 0, 4)) if last is None else last.stress,
+        displacement=state.u[model.numbering.node_equations])
