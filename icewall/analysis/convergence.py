@@ -42,7 +42,14 @@ import numpy as np
 
 from icewall.analysis import convergence_table as ct
 from icewall.analysis.extract import RESIDUAL_DEFLECTION
-from icewall.analysis.sweep import FINISHED, Job, finished_status, run_job, run_local
+from icewall.analysis.sweep import (
+    FINISHED,
+    Job,
+    finished_status,
+    make_output_directory,
+    run_job,
+    run_local,
+)
 from icewall.errors import DeckError, ResultError
 
 DEFAULT_LADDER = {"families": {
@@ -319,10 +326,7 @@ def convergence_command(deck: str, ladder: str | None = None, quick: bool = Fals
     outdir = outdir or os.path.join("results", "convergence", Path(deck).stem)
     levels, base, residual_at = build_jobs(deck, families, overrides, outdir)
     jobs = list({lv["job"].name: lv["job"] for lv in levels}.values())
-    try:
-        os.makedirs(outdir, exist_ok=True)
-    except OSError as exc:
-        raise ResultError(f"cannot create the output directory {outdir}: {exc}") from None
+    make_output_directory(outdir)
     results: dict[str, dict] = {}
     todo = []
     for job in jobs:

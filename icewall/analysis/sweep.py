@@ -300,10 +300,7 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
         for job in jobs:
             echo(f"{job.name}  {job.deck}  {' '.join(job.overrides)}  -> {job.output}")
         return 0
-    try:
-        os.makedirs(outdir, exist_ok=True)
-    except OSError as exc:
-        raise ResultError(f"cannot create the output directory {outdir}: {exc}") from None
+    make_output_directory(outdir)
     results: dict[str, dict] = {}
     todo = []
     width = max(len(job.name) for job in jobs)
@@ -335,3 +332,11 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
     say(f"{len(todo)} run(s) in {time.perf_counter() - start:.1f} s, "
         f"{len(jobs) - len(todo)} skipped; table: {table}")
     return 0 if all(r["status"] == "completed" for r in rows) else 1
+
+
+def make_output_directory(outdir: str | os.PathLike) -> None:
+    """Create `outdir` (and parents), or raise ResultError saying why not."""
+    try:
+        os.makedirs(outdir, exist_ok=True)
+    except OSError as exc:
+        raise ResultError(f"cannot create the output directory {outdir}: {exc}") from None

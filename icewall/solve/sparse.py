@@ -19,6 +19,7 @@ from __future__ import annotations
 import importlib
 import os
 import warnings
+from abc import ABC, abstractmethod
 from functools import cache
 
 import numpy as np
@@ -86,7 +87,7 @@ def choose_backend(requested: str | None = None) -> str:
     return name
 
 
-class SparseLU:
+class SparseLU(ABC):
     """LU factors of one square sparse matrix; `solve` takes (n,) or (n, k) right-hand sides."""
 
     backend = "superlu"
@@ -94,9 +95,9 @@ class SparseLU:
     def __init__(self, A: sp.csc_matrix) -> None:
         self.A = A
 
+    @abstractmethod
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """x with A x = rhs (unchecked)."""
-        raise NotImplementedError
 
     def accurate(self, b: np.ndarray, x: np.ndarray) -> bool:
         """x is finite and leaves residuals below RESIDUAL_RTOL (|A| |x| + |b|) in every
