@@ -135,11 +135,15 @@ class Concrete:
         "strength and strain are the uniaxial f'c, eps_c (equal), or at least those (floor: the "
         "errata's signed reading, under which out-of-plane confinement in plane strain raises "
         "them again)", choices=("equal", "floor"))
-    trial_stress: str = option("total", doc="trial stress of Fig. 3.12 step 3: total = secant "
-                               "matrix of the committed moduli times the total strain in the "
-                               "new axes; incremental = committed stress rotated into the new "
-                               "axes plus C dEps (forward Euler, sub-stepped)",
-                               choices=("total", "incremental"))
+    trial_stress: str = option(
+        "corotational", doc="trial stress of Fig. 3.12 step 3: corotational = committed "
+        "principal stresses carried with the rotating axes plus C dEps between the committed "
+        "and the new principal strains (consistent: a zero increment returns the committed "
+        "stress; no committed stress leaks into an open crack); incremental = committed "
+        "stress rotated into the new axes plus C dEps (as printed, forward Euler, "
+        "sub-stepped); total = committed secant matrix times the total strain (older default: "
+        "not consistent once nu has grown by eq. 3.19, which can let the iteration jump to "
+        "spurious all-cracked states)", choices=("corotational", "incremental", "total"))
     substep_ratio: float = option(0.5, doc="largest strain sub-step of the stress update, as a "
                                   "fraction of the cracking strain f't/E (forward-Euler "
                                   "accuracy of Fig. 3.12 over large increments)",

@@ -6,7 +6,12 @@ Fig. 3.12 from the committed state to the given total strain:
 
 1-2. beta of the new principal strains; committed stress and the strain increment in those axes.
 3.   Trial stress sigma_lt = sigma_l + C_l(E, nu) d eps_l, with C_l rebuilt from the stored E, nu
-     in the new axes (errata §3, instead of rotating the old C_g).
+     in the new axes (errata §3, instead of rotating the old C_g). `trial_stress`:
+     "incremental" rotates the committed stress into the new axes (as printed); "corotational"
+     (deck default) carries the committed principal stresses with the axes, d eps_l being the
+     change of the principal strains, so that no committed stress leaks into an open crack
+     and a zero increment returns the committed stress; "total" is C_l eps_l (not consistent
+     once nu has grown, see tests/materials/test_concrete_solver_options.py).
 4.   eps_iu = sigma_lt,i / E_i with the secant E_i (errata 1.1 on eq. 3.8: step 4, not 3.8).
 5.   sigma_ic, eps_ic from the ultimate surfaces on the ray of the trial stress (errata 1.3).
 6.   Per direction: loading (|eps_iu| beyond its maximum) follows eqs. 3.9-3.11 and updates the
@@ -96,8 +101,13 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
 
     # Steps 1-2: new axes; committed stress and strain increment referred to them (errata 1.3).
     angle = principal_strain_angle(strain, state.angle)
-    strain_increment = local_normal_components(strain - state.strain, angle, 1.0)
-    committed_stress = local_normal_components(state.stress, angle, 2.0)
+    if trial_stress == "corotational":  # committed principal values carried with the axes
+        strain_increment = (local_normal_components(strain, angle, 1.0)
+                            - local_normal_components(state.strain, state.angle, 1.0))
+        committed_stress = local_normal_components(state.stress, state.angle, 2.0)
+    else:
+        strain_increment = local_normal_components(strain - state.strain, angle, 1.0)
+        committed_stress = local_normal_components(state.stress, angle, 2.0)
     stiffness = orthotropic_normal_stiffness(state.secant_modulus, state.poisson_ratio)
     if plane_stress:  # sigma_3t = 0 fixes the out-of-plane strain increment (errata §3)
         strain_increment[:, 2] = -(committed_stress[:, 2]
@@ -141,15 +151,21 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         uniaxial_stress, _ = _envelope(eps_u[rows], uniaxial_strength, np.where(
             eps_u[rows] > 0.0, params.eps_t, -params.eps_c), params, rows)
         loading[rows] |= sign_change[rows] & (secant_line[rows] > uniaxial_stress * (1 + 1e-9))
-    if frozen is not None:  # the solver's chatter damping: these points only unload/reload
-        loading &= ~np.asarray(frozen, dtype=bool)[:, None]
     # on the same branch the secant never grows (damage is irreversible; the thesis is silent):
     # where the surface now gives a larger sigma_ic, load along the current secant instead
     heal = ~sign_change & (envelope_secant > state.secant_modulus)
+    held = np.zeros_like(loading)
+    if frozen is not None:  # the solver's chatter damping: no damage grows at these points
+        held = loading & ~heal & np.asarray(frozen, dtype=bool)[:, None]
+        loading &= ~held
     secant_modulus = np.where(loading & ~heal, envelope_secant, state.secant_modulus)
     # on the envelope sigma_i = sign(eps_iu) sigma_env = E_i eps_iu, except where the secant is
     # floored far down a softening branch (uniaxial.SECANT_FLOOR): there the stress -> 0
     local_stress = np.where(loading & ~heal, np.copysign(envelope_stress, eps_u), trial)
+    # a held direction keeps its secant but never rises above its envelope (it would reload
+    # along the secant past the peak, e.g. to twice f'c in uniaxial compression)
+    local_stress = np.where(held, np.copysign(np.minimum(np.abs(trial), envelope_stress),
+                                              eps_u), local_stress)
 
     strain_ratio = magnitude / np.abs(np.where(loading, peak_strain, state.uniaxial_peak_strain))
     nu_new = np.where(eps_u > 0.0, tension_poisson_ratio(strain_ratio, nu0),

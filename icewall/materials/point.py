@@ -171,13 +171,14 @@ def control_schedule(max_strain: float, n_steps: int, unload_at: Sequence[float]
 
 def _solve_increment(path: _Path, prescribed: np.ndarray, guess: np.ndarray,
                      state: ConcreteState, params: Any, formulation: str,
-                     tolerance: float, max_iterations: int
+                     tolerance: float, max_iterations: int, trial_stress: str = "incremental"
                      ) -> tuple[np.ndarray, np.ndarray, ConcreteState, int]:
     """Free strains meeting the stress conditions; Newton with the secant, then the tangent."""
     strain = prescribed.copy()
     strain[path.free] = guess
     for iteration in range(max_iterations):
-        stress, moduli, trial = update_concrete(strain[None], state, params, formulation)
+        stress, moduli, trial = update_concrete(strain[None], state, params, formulation,
+                                                trial_stress)
         if not path.free:
             return strain, stress[0], trial, iteration
         residual = path.conditions @ stress[0]
@@ -199,13 +200,14 @@ def _solve_increment(path: _Path, prescribed: np.ndarray, guess: np.ndarray,
 
 def run_path(path: str, params: Any, formulation: str = "plane_stress", n_steps: int = 400,
              max_strain: float = 0.006, unload_at: Sequence[float] = (),
-             tolerance: float = 1e-12, max_iterations: int = 60, strict: bool = False
-             ) -> PointResult:
+             tolerance: float = 1e-12, max_iterations: int = 60, strict: bool = False,
+             trial_stress: str = "incremental") -> PointResult:
     """Drive one point along `path` (see module docstring); returns every converged increment.
 
     tolerance is relative to f'c on the stress conditions. If an increment finds no state
     meeting them (e.g. a stress-ratio path past a softening bifurcation) the path stops there
-    and `stopped` says why; strict=True raises ConvergenceError instead.
+    and `stopped` says why; strict=True raises ConvergenceError instead. `trial_stress` is
+    the concrete update's Fig. 3.12 step-3 form (the deck's `trial_stress`).
     """
     spec = _parse_path(path, formulation)
     schedule = control_schedule(max_strain, n_steps, () if spec.kind == "rotating" else unload_at)
@@ -233,7 +235,7 @@ def run_path(path: str, params: Any, formulation: str = "plane_stress", n_steps:
         try:
             strain, stress, state_new, iterations = _solve_increment(
                 spec, prescribed, guess, state, params, formulation,
-                tolerance * float(params.fc), max_iterations)
+                tolerance * float(params.fc), max_iterations, trial_stress)
         except ConvergenceError as error:
             if strict:
                 raise

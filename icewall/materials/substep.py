@@ -26,7 +26,7 @@ def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params:
                                frozen: np.ndarray | None = None
                                ) -> tuple[np.ndarray, np.ndarray, ConcreteState]:
     """`update_concrete` over sub-steps of at most `max_strain_step` per point (pure)."""
-    if trial_stress == "total" or frozen is not None:  # no sub-steps needed / allowed
+    if trial_stress != "incremental":  # total / co-rotational trials are not sub-stepped
         return update_concrete(strain, state, params, formulation, trial_stress, frozen)
     strain = np.asarray(strain, dtype=float).reshape(-1, 4)
     n = strain.shape[0]
@@ -35,10 +35,13 @@ def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params:
         increment[:, 2] = 0.0  # zz is not an input in plane strain / plane stress
     size = np.abs(increment).max(axis=1)
     n_sub = np.clip(np.ceil(size / max_strain_step), 1, max_substeps).astype(int)
+    # frozen (chatter-damped) points are sub-stepped too: the map must not change form in
+    # the middle of an increment when the solver starts to freeze points
     if n_sub.max() == 1:
-        return update_concrete(strain, state, params, formulation)
-    stress, moduli, trial = update_concrete(strain, state, params, formulation)
+        return update_concrete(strain, state, params, formulation, frozen=frozen)
+    stress, moduli, trial = update_concrete(strain, state, params, formulation, frozen=frozen)
     many = np.flatnonzero(n_sub > 1)
+    sub_frozen = None if frozen is None else np.asarray(frozen, dtype=bool)[many]
     current = state.take(many)
     sub_params = take_parameters(params, many, n)
     start = state.strain[many] + 0.0
@@ -48,7 +51,8 @@ def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params:
         target = start + fraction * (strain[many] - start)
         if formulation == "plane_stress":
             target[:, 2] = current.strain[:, 2]
-        sig, D, new = update_concrete(target, current, sub_params, formulation)
+        sig, D, new = update_concrete(target, current, sub_params, formulation,
+                                      frozen=sub_frozen)
         done = j > steps  # finished points keep their state
         current = new.select(~done, current) if done.any() else new
         if j == int(steps.max()):

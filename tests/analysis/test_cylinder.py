@@ -76,6 +76,22 @@ def test_elastic_fixed_platen_between_energy_bounds():
     assert E0 * (1 + 1e-4) < bonded < confined
 
 
+@pytest.mark.parametrize("trial", ["corotational", "incremental"])
+def test_single_element_keeps_its_load_through_the_peak_at_the_deck_defaults(trial):
+    """Regression: at the deck defaults (tolerance 0.05, chatter freezing on) the frictionless
+    single element is a uniaxial compression test. With the old `total` trial it lost all
+    its load at eps = 0.0018 (a spurious all-cracked equilibrium), and frozen points reloaded
+    along their secant to 117.9 MPa at eps = 0.004 (the envelope gives 42 MPa)."""
+    case = CylinderCase(53.5, 1, 1, None, "frictionless", {"trial_stress": trial})
+    curve = run_cylinder(case, ((0.004, 1e-4),))
+    assert not curve.stopped
+    assert 0.97 * 53.5 < curve.peak_stress < 1.06 * 53.5  # tolerance 0.05 on the loads
+    assert 0.002 < curve.strain_at_peak < 0.003
+    after = curve.strain > curve.strain_at_peak
+    assert np.all(curve.stress[after] > 0.6 * 53.5)  # softens along eq. 3.11b, no collapse
+    assert np.all(np.diff(curve.stress[after]) < 0.01 * 53.5)  # and never reloads
+
+
 @pytest.mark.parametrize("nx, ny, max_strain", [(1, 1, 0.004), (2, 3, 0.0025)])
 def test_uniform_nonlinear_cylinder_follows_material_point(nx, ny, max_strain):
     """Frictionless head: every Gauss point is in uniaxial compression, so the average curve

@@ -4,10 +4,12 @@ frozen points (chatter damping) and sub-stepping."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from icewall.materials.concrete import update_concrete
 from icewall.materials.concrete_state import ConcreteState
 from icewall.materials.parameters import derive_concrete_parameters
+from icewall.materials.point import run_path
 from icewall.materials.substep import update_concrete_substepped
 
 PARAMS = derive_concrete_parameters(53.5, 100.0)
@@ -52,6 +54,50 @@ def test_total_trial_leaks_no_committed_stress_into_a_cracked_direction_on_rotat
     assert major <= 0.05 * PARAMS.ft  # no spurious tension or compression across the crack
 
 
+def test_corotational_trial_leaks_no_committed_stress_into_a_cracked_direction():
+    """The co-rotational trial carries the committed principal stresses with the axes: the
+    open crack stays (nearly) stress free when a little shear rotates the axes, and without
+    rotation it is the incremental trial of Fig. 3.12."""
+    state = ConcreteState.initial(1, PARAMS)
+    for strain in ([4e-3, 0.0, 0.0, 0.0], [4e-3, -1.5e-3, 0.0, 0.0]):
+        _, _, state = update_concrete(np.array([strain]), state, PARAMS, "plane_stress",
+                                      "corotational")
+    assert state.cracked[0, 0]
+    rotated = np.array([[4e-3, -1.5e-3, 0.0, 4e-4]])
+    stress, _, new = update_concrete(rotated, state, PARAMS, "plane_stress", "corotational")
+    c = 0.5 * (stress[0, 0] + stress[0, 1])
+    radius = np.hypot(0.5 * (stress[0, 0] - stress[0, 1]), stress[0, 3])
+    assert c + radius <= 0.05 * PARAMS.ft
+    fixed = np.array([[4e-3, -1.6e-3, 0.0, 0.0]])
+    a, _, _ = update_concrete(fixed, state, PARAMS, "plane_stress", "corotational")
+    b, _, _ = update_concrete(fixed, state, PARAMS, "plane_stress", "incremental")
+    assert np.allclose(a, b, rtol=1e-12, atol=1e-12)
+
+
+def _uniaxial_compression_state(trial: str, strain: float = 0.0017) -> ConcreteState:
+    """Axisymmetric uniaxial compression (hoop and radial stress free) to `strain`, where the
+    compression Poisson ratio of eq. 3.19 has grown from 0.2 to about 0.45."""
+    result = run_path("uniaxial-compression", PARAMS, "axisymmetric", n_steps=34,
+                      max_strain=strain, tolerance=1e-7, trial_stress=trial)
+    assert not result.stopped
+    state = ConcreteState.initial(1, PARAMS)
+    for step_strain in result.strain[1:]:
+        _, _, state = update_concrete(step_strain[None], state, PARAMS, "axisymmetric", trial)
+    assert np.allclose(state.stress[0], result.stress[-1])
+    return state
+
+
+@pytest.mark.parametrize("trial", ["incremental", "corotational"])
+def test_a_zero_increment_returns_the_committed_stress(trial):
+    """Re-evaluating the committed strain gives the committed stress back (the total trial
+    gives C(E, nu) eps instead, which differs once nu has grown by eq. 3.19)."""
+    state = _uniaxial_compression_state(trial)
+    assert state.poisson_ratio[0, 0] > 0.4
+    again, _, same = update_concrete(state.strain, state, PARAMS, "axisymmetric", trial)
+    assert np.allclose(again, state.stress, rtol=1e-9, atol=1e-9 * PARAMS.fc)
+    assert np.array_equal(same.secant_modulus, state.secant_modulus)
+
+
 def test_frozen_points_only_unload_and_reload():
     state = ConcreteState.initial(1, PARAMS)
     half = 0.3 * TENSION  # 0.9 eps_t: still on the linear branch
@@ -65,8 +111,32 @@ def test_frozen_points_only_unload_and_reload():
     assert np.array_equal(frozen_state.poisson_ratio, state.poisson_ratio)
     assert np.array_equal(frozen_state.max_equivalent_uniaxial_strain,
                           state.max_equivalent_uniaxial_strain)
-    assert frozen[0, 0] > committed[0, 0]  # it reloads along the secant
     assert free[0, 0] < PARAMS.ft
+    # it reloads along the secant, but not above the envelope, which it meets here
+    assert frozen[0, 0] == pytest.approx(free[0, 0], rel=1e-9)
+    inside, _, _ = update_concrete(0.32 * TENSION, state, PARAMS, "plane_stress", "total",
+                                   frozen=np.array([True]))
+    linear, _, _ = update_concrete(0.32 * TENSION, state, PARAMS, "plane_stress", "total")
+    assert committed[0, 0] < inside[0, 0] == pytest.approx(linear[0, 0], rel=1e-12)
+
+
+def test_frozen_points_never_reload_above_their_envelope():
+    """A point frozen at half its compressive peak strain and driven far past it in one step
+    (as the solver's chatter damping does) keeps its secant and history but its stress is
+    capped at the envelope, softened beyond the peak; it used to rise along the secant."""
+    state = ConcreteState.initial(1, PARAMS)
+    half = np.array([[-0.5 * PARAMS.eps_c, 0.0, 0.0, 0.0]])
+    _, _, state = update_concrete(half, state, PARAMS, "plane_stress", "incremental")
+    peak = 0.0
+    for factor in (1.0, 2.0, 4.0):
+        strain = np.array([[-factor * PARAMS.eps_c, 0.0, 0.0, 0.0]])
+        stress, _, held = update_concrete(strain, state, PARAMS, "plane_stress", "incremental",
+                                          frozen=np.array([True]))
+        free, _, _ = update_concrete(strain, state, PARAMS, "plane_stress", "incremental")
+        assert np.array_equal(held.secant_modulus, state.secant_modulus)
+        assert stress[0, 0] == pytest.approx(free[0, 0], rel=1e-9)  # capped at the envelope
+        peak = max(peak, -stress[0, 0])
+    assert -stress[0, 0] < 0.8 * peak  # the softened envelope at 4 eps_c, not the secant line
 
 
 def test_substepping_converges_to_the_fine_path():
