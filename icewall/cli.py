@@ -234,9 +234,13 @@ def params(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default=None,
               help="Write the stress-strain path to this CSV file ('-' for stdout).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--trial-stress", default="corotational", show_default=True,
+              type=click.Choice(["corotational", "incremental", "total"]),
+              help="Fig. 3.12 step-3 trial stress (the deck's materials.concrete.trial_stress).")
 @_handle_errors
 def point(fc: float, h_c: float, path: str, formulation: str, steps: int, max_strain: float,
-          unload_at: tuple[float, ...], csv_path: str | None, as_json: bool) -> None:
+          unload_at: tuple[float, ...], csv_path: str | None, as_json: bool,
+          trial_stress: str) -> None:
     """Drive one concrete material point along a strain path (no mesh)."""
     from icewall.materials.parameters import derive_concrete_parameters
     from icewall.materials.point import run_path
@@ -244,7 +248,7 @@ def point(fc: float, h_c: float, path: str, formulation: str, steps: int, max_st
     try:
         params = derive_concrete_parameters(fc, h_c)
         result = run_path(path, params, formulation, n_steps=steps, max_strain=max_strain,
-                          unload_at=unload_at)
+                          unload_at=unload_at, trial_stress=trial_stress)
     except ValueError as exc:
         raise click.BadParameter(str(exc)) from None
     if csv_path == "-":

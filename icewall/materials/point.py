@@ -171,7 +171,7 @@ def control_schedule(max_strain: float, n_steps: int, unload_at: Sequence[float]
 
 def _solve_increment(path: _Path, prescribed: np.ndarray, guess: np.ndarray,
                      state: ConcreteState, params: Any, formulation: str,
-                     tolerance: float, max_iterations: int, trial_stress: str = "incremental"
+                     tolerance: float, max_iterations: int, trial_stress: str = "corotational"
                      ) -> tuple[np.ndarray, np.ndarray, ConcreteState, int]:
     """Free strains meeting the stress conditions; Newton with the secant, then the tangent."""
     strain = prescribed.copy()
@@ -201,7 +201,7 @@ def _solve_increment(path: _Path, prescribed: np.ndarray, guess: np.ndarray,
 def run_path(path: str, params: Any, formulation: str = "plane_stress", n_steps: int = 400,
              max_strain: float = 0.006, unload_at: Sequence[float] = (),
              tolerance: float = 1e-12, max_iterations: int = 60, strict: bool = False,
-             trial_stress: str = "incremental") -> PointResult:
+             trial_stress: str = "corotational") -> PointResult:
     """Drive one point along `path` (see module docstring); returns every converged increment.
 
     tolerance is relative to f'c on the stress conditions. If an increment finds no state

@@ -53,6 +53,19 @@ def test_point_uniaxial_compression_peaks_at_fc(tmp_path):
     assert len(rows) == 201
 
 
+def test_point_trial_stress_forms_agree_without_rotation_and_differ_on_the_rotating_path():
+    def peak(path, trial):
+        result = invoke("point", "--fc", "53.5", "--path", path, "--json", "--steps", "120",
+                        "--max-strain", "0.004", "--trial-stress", trial)
+        assert result.exit_code == 0, result.output
+        return json.loads(result.output)["peak_stress_xx"]
+
+    assert peak("uniaxial-compression", "incremental") == peak("uniaxial-compression",
+                                                               "corotational")
+    assert peak("rotating", "incremental") != peak("rotating", "corotational")
+    assert invoke("point", "--fc", "53.5", "--trial-stress", "secant").exit_code == 2
+
+
 def test_point_rejects_a_bad_path():
     result = invoke("point", "--fc", "53.5", "--path", "zigzag")
     assert result.exit_code == 2
