@@ -201,7 +201,7 @@ def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings
                 wall_time=time.perf_counter() - start, gauss=gauss,
                 displacement=report.displacement if due and "displacement" in fields else None,
                 scalars={**report.counts, **report.energy, "step_cuts": inc.cuts,
-                         "snap_back": int(inc.snap_back),
+                         "snap_back": int(inc.snap_back), "jumped": int(inc.jumped),
                          "preload_stage": int(inc.kind == "preload"),
                          "preload_factor": inc.preload_factor},
                 arrays=report.arrays if due and "state" in fields else {},

@@ -31,6 +31,7 @@ def summarize(path: str | os.PathLike) -> dict:
         "load_measure": a.get("load_measure"), "load_unit": a.get("load_unit"),
         "ductility": ductility,  # CSA S474 8.4.4, icewall.post.ductility
         "snap_throughs": [],  # control deflections where a snap-back drop was accepted
+        "jumps": [],  # control deflections reached by a step over a stall (max_jumps)
     }
     if out["n_steps"]:
         load, defl, its = h["load"], h["control_displacement"], h["iterations"]
@@ -44,6 +45,8 @@ def summarize(path: str | os.PathLike) -> dict:
         })
         if "snap_back" in h:
             out["snap_throughs"] = [float(d) for d in defl[np.asarray(h["snap_back"]) > 0]]
+        if "jumped" in h:
+            out["jumps"] = [float(d) for d in defl[np.asarray(h["jumped"]) > 0]]
     return out
 
 
@@ -93,6 +96,8 @@ def format_summary(summary: dict) -> str:
         ("total iterations", _num(s.get("total_iterations"))),
         ("iterations per step", iters),
         ("snap-throughs", ", ".join(f"at {d:.4g} mm" for d in s.get("snap_throughs") or ())
+         or "none"),
+        ("steps over a stall", ", ".join(f"to {d:.4g} mm" for d in s.get("jumps") or ())
          or "none"),
         ("run time", _num(s.get("run_time_s"), "s", ".1f")),
         *_ductility_rows(s.get("ductility"), lu),

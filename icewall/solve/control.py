@@ -14,7 +14,7 @@ import logging
 import math
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -66,6 +66,7 @@ class Increment:
     cuts: int = 0
     wall_time: float = 0.0
     snap_back: bool = False  # the load dropped in a jump displacement control cannot follow
+    jumped: bool = False  # a step of JUMP_FACTOR increments over a stall (settings.max_jumps)
 
 
 class StepFailed(Exception):
@@ -247,23 +248,39 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
     peak_load = state.load_factor
     if resume:
         current, size, peak_load = resume
-    damp_cycles = True
+    retry = 0  # fallback iteration schemes tried on the smallest step (FALLBACKS)
+    jumps, jumping = 0, False  # steps over a stall so far; this attempt is one
     while current < target - 1e-12 * max(1.0, abs(target)):
         goal = min(current + size, target)
         tic = time.perf_counter()
+        scheme, damp_cycles = _fallback(settings, retry)
         try:
             if kind == "control":
-                inc = _iterate(problem, settings, state, goal, preload, damp_cycles)
+                inc = _iterate(problem, scheme, state, goal, preload, damp_cycles)
             else:
-                inc = _iterate(problem, settings, state, None, goal, damp_cycles)
+                inc = _iterate(problem, scheme, state, None, goal, damp_cycles)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
             reason = getattr(exc, "reason", "non-convergence")
-            if size <= smallest and damp_cycles and reason == "non-convergence":
-                # the damped relaxation can also crawl where the undamped one gets through:
-                # retry the smallest step once without it before giving up
-                damp_cycles = False
+            if size <= smallest and reason == "non-convergence" and retry < (
+                    FALLBACKS if settings.acceleration != "aitken" else 1):
+                # the damped relaxation can crawl where another scheme gets through: retry
+                # the smallest step with each fallback (same equilibrium, same tolerances)
+                retry += 1
+                log.info("%s %.4g: retrying the smallest step with fallback %d", kind, goal,
+                         retry)
                 continue
+            if size <= smallest and kind == "control" and jumps < settings.max_jumps:
+                # step over the stall from the last converged state, as a stroke-controlled
+                # test goes on past a local instability (recorded in the history)
+                jumps, jumping, retry = jumps + 1, True, 0
+                size = JUMP_FACTOR * step_size
+                log.info("control %.4g: stepping over the stall to %.4g (jump %d)", goal,
+                         current + size, jumps)
+                continue
+            if jumping:
+                raise ConvergenceError(f"{exc} at {kind} {goal:.4g}, also when stepping over "
+                                       f"the stall ({jumps} jumps)", reason=reason) from None
             if size <= smallest:
                 raise ConvergenceError(f"{exc} at {kind} {goal:.4g} after "
                                        f"{settings.max_step_cuts} step cuts",
@@ -271,7 +288,7 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
             size = 0.5 * size
             continue
         snap = kind == "control" and _abrupt_drop(state, inc, peak_load)
-        if snap and not (size <= smallest and settings.on_snap_back == "continue"):
+        if snap and not ((size <= smallest or jumping) and settings.on_snap_back == "continue"):
             c.rollback()
             if size <= smallest:
                 raise ConvergenceError(
@@ -282,7 +299,8 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
             size = 0.5 * size
             continue
         c.commit()
-        damp_cycles = True
+        retry = 0
+        inc.jumped, jumping = jumping, False
         inc.snap_back = bool(snap)  # accepted load drop (on_snap_back: continue)
         if snap:
             log.info("snap-back at %.4g mm accepted: load %.4g -> %.4g", goal,
@@ -299,6 +317,21 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
         state = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
                           inc.preload_factor, scale, (kind, current, size, peak_load))
         yield inc, state
+
+
+JUMP_FACTOR = 2.0
+"""A jump over a stall is one step of this many control increments (settings.max_jumps)."""
+
+FALLBACKS = 2
+"""Iteration schemes tried, in turn, on a smallest step that did not converge: 1 the halving
+relaxation without the cycle damping, 2 Aitken's relaxation (unless that is the setting)."""
+
+
+def _fallback(settings: SolverSettings, retry: int) -> tuple[SolverSettings, bool]:
+    """Settings and cycle damping of fallback `retry` (0: the deck's own scheme)."""
+    if retry == 2 and settings.acceleration != "aitken":
+        return replace(settings, acceleration="aitken"), True
+    return settings, retry != 1
 
 
 def _abrupt_drop(state: PathState, inc: Increment, peak_load: float) -> bool:

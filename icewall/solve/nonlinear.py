@@ -49,11 +49,17 @@ class StepReport:
 
 
 def point_flags(groups: tuple[MaterialGroup, ...], states) -> tuple[np.ndarray | None, ...]:
-    """Per group, the crack/crush (concrete) or yield (steel) flags of each point, (n, k)."""
+    """Per group, the flags of each point whose switching within an increment the solver
+    counts as chatter, (n, k): concrete: cracked, crushed, and loading on a descending branch
+    (per direction: the loading/unloading decision beyond the peak, the classic limit cycle
+    of a secant iteration on softening); steel: yielded."""
     flags = []
     for group, state in zip(groups, states, strict=True):
         if group.model == "rotating_crack":
-            flags.append(np.concatenate([state.cracked, state.crushed], axis=1))
+            magnitude = np.abs(state.equivalent_uniaxial_strain)
+            softening = ((magnitude >= state.max_equivalent_uniaxial_strain)
+                         & (magnitude > np.abs(state.uniaxial_peak_strain)))
+            flags.append(np.concatenate([state.cracked, state.crushed, softening], axis=1))
         elif group.model == "von_mises":
             flags.append(np.asarray(state.yielded).reshape(-1, 1))
         else:

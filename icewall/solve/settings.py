@@ -22,6 +22,7 @@ class SolverSettings:
     max_flag_changes: int = 4  # flag changes of a Gauss point in an increment before freezing
     on_snap_back: str = "continue"  # stop | continue (accept the drop, recorded per step)
     max_relaxation: float = 1.0  # largest relaxation factor of the halving scheme
+    max_jumps: int = 0  # failed smallest control steps retried as one step of 2 increments
 
 
 def solver_settings(deck: Deck) -> SolverSettings:
@@ -33,4 +34,4 @@ def solver_settings(deck: Deck) -> SolverSettings:
         preload_increments=a.preload_increments,
         reset_slip_each_step=deck.materials.interface.reset_slip_each_step,
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
-        on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation)
+        on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps)

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from softening_bar import bar_problem, settings
 
 from icewall.errors import ConvergenceError
-from icewall.solve.control import follow_path
+from icewall.solve import control
+from icewall.solve.control import FALLBACKS, _fallback, follow_path
 
 
 def analytic_softening_load(deflection, length, h, E, f_weak, failure_strain, area=10.0):
@@ -81,3 +84,59 @@ def test_snap_back_accepted_as_snap_through_lands_on_the_softened_branch():
                                                 rel=1e-6)
     peak = max(inc.load_factor for inc in before)
     assert all(abs(inc.load_factor) < 1e-6 * peak for inc in after)
+
+
+def test_fallback_schemes_on_the_smallest_step():
+    """A smallest step that does not converge is retried with the undamped halving
+    relaxation, then with Aitken's; tolerances and everything else stay the deck's."""
+    base = settings(1.0, 0.1)
+    schemes = [_fallback(base, retry) for retry in range(FALLBACKS + 1)]
+    assert [(s.acceleration, damp) for s, damp in schemes] == [
+        ("halving", True), ("halving", False), ("aitken", True)]
+    for scheme, _ in schemes:
+        assert (scheme.tolerance_load, scheme.tolerance_displacement, scheme.max_iterations) == (
+            base.tolerance_load, base.tolerance_displacement, base.max_iterations)
+
+
+def _stall_between(monkeypatch, low: float, high: float) -> list[float]:
+    """Make every increment whose target lies in (low, high) fail to converge."""
+    real, attempted = control._iterate, []
+
+    def stalling(problem, scheme, state, goal, *args):
+        attempted.append(goal)
+        if goal is not None and low < goal < high:
+            raise control.StepFailed("stalled (test)", "non-convergence")
+        return real(problem, scheme, state, goal, *args)
+
+    monkeypatch.setattr(control, "_iterate", stalling)
+    return attempted
+
+
+def test_a_stall_is_stepped_over_and_recorded(monkeypatch):
+    """A control step that fails at every size and scheme is retried as one step of two
+    increments from the last converged state; the landing step is flagged, the rest of the
+    path is the same equilibrium as without the stall (softening bar, closed form)."""
+    length, n_el, E, f, weak, eps_f = 100.0, 10, 30000.0, 3.0, 0.9, 0.002
+    problem, initial = bar_problem(length, n_el, E, f, weak, eps_f)
+    attempted = _stall_between(monkeypatch, 0.0060, 0.0071)  # fails on the way to 0.007
+    run = replace(settings(0.012, 0.001, cuts=2), max_jumps=1)
+    incs = [inc for inc, _ in follow_path(problem, run, initial)]
+    deflections = [round(inc.control_displacement, 9) for inc in incs]
+    assert 0.007 not in deflections and 0.008 in deflections
+    assert [d for d, inc in zip(deflections, incs, strict=True) if inc.jumped] == [0.008]
+    assert deflections[-1] == pytest.approx(0.012)
+    for inc in incs:
+        assert inc.load_factor == pytest.approx(analytic_softening_load(
+            inc.control_displacement, length, length / n_el, E, weak * f, eps_f), rel=1e-5)
+    assert sum(0.006 < g < 0.0071 for g in attempted) == 2 + 1 + FALLBACKS  # 3 sizes + 2 schemes
+
+
+def test_a_stall_stops_the_run_when_no_jumps_are_allowed(monkeypatch):
+    problem, initial = bar_problem(100.0, 10)
+    _stall_between(monkeypatch, 0.0060, 0.0071)
+    converged = []
+    with pytest.raises(ConvergenceError) as info:
+        for inc, _ in follow_path(problem, settings(0.012, 0.001, cuts=2), initial):
+            converged.append(inc.control_displacement)
+    assert info.value.reason == "non-convergence" and "step cuts" in str(info.value)
+    assert converged[-1] == pytest.approx(0.006)
