@@ -154,18 +154,19 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     # on the same branch the secant never grows (damage is irreversible; the thesis is silent):
     # where the surface now gives a larger sigma_ic, load along the current secant instead
     heal = ~sign_change & (envelope_secant > state.secant_modulus)
-    held = np.zeros_like(loading)
-    if frozen is not None:  # the solver's chatter damping: no damage grows at these points
-        held = loading & ~heal & np.asarray(frozen, dtype=bool)[:, None]
+    frozen_column = None if frozen is None else np.asarray(frozen, dtype=bool)[:, None]
+    if frozen_column is not None:  # the solver's chatter damping: no damage grows here
+        held = loading & ~heal & frozen_column
         loading &= ~held
     secant_modulus = np.where(loading & ~heal, envelope_secant, state.secant_modulus)
     # on the envelope sigma_i = sign(eps_iu) sigma_env = E_i eps_iu, except where the secant is
     # floored far down a softening branch (uniaxial.SECANT_FLOOR): there the stress -> 0
     local_stress = np.where(loading & ~heal, np.copysign(envelope_stress, eps_u), trial)
-    # a held direction keeps its secant but never rises above its envelope (it would reload
-    # along the secant past the peak, e.g. to twice f'c in uniaxial compression)
-    local_stress = np.where(held, np.copysign(np.minimum(np.abs(trial), envelope_stress),
-                                              eps_u), local_stress)
+    if frozen_column is not None:
+        # a held direction keeps its secant but never rises above its envelope (it would
+        # reload along the secant past the peak, e.g. to twice f'c in uniaxial compression)
+        local_stress = np.where(held, np.copysign(np.minimum(np.abs(trial), envelope_stress),
+                                                  eps_u), local_stress)
 
     strain_ratio = magnitude / np.abs(np.where(loading, peak_strain, state.uniaxial_peak_strain))
     nu_new = np.where(eps_u > 0.0, tension_poisson_ratio(strain_ratio, nu0),
@@ -192,9 +193,8 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         equivalent_uniaxial_strain=eps_u,
         # a frozen point's history does not grow: it loads on from there in the next step
         max_equivalent_uniaxial_strain=np.maximum(state.max_equivalent_uniaxial_strain,
-                                                  magnitude if frozen is None else np.where(
-                                                      np.asarray(frozen)[:, None], 0.0,
-                                                      magnitude)),
+                                                  magnitude if frozen_column is None
+                                                  else np.where(frozen_column, 0.0, magnitude)),
         secant_modulus=secant_modulus,
         poisson_ratio=poisson_ratio,
         shear_modulus=shear_modulus,

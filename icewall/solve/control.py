@@ -93,10 +93,11 @@ def _norm(x: np.ndarray) -> float:
 
 
 def _chatter(problem: Problem, settings: SolverSettings, states, flags_before, changes,
-             forensics: dict[str, list[int]]) -> tuple | None:
+             forensics: dict[str, list[int]]) -> tuple[tuple | None, tuple]:
     """Count Gauss points whose crack/crush/yield flags changed in this iteration; points that
     changed `max_flag_changes` times in the increment may only unload/reload for the rest of
-    it (they go on loading in the next increment). Returns the per-group frozen masks."""
+    it (they go on loading in the next increment). Returns the per-group frozen masks (None
+    if no point is frozen) and this iteration's flags."""
     flags = problem.point_flags(states)
     total, frozen, any_frozen = 0, [], False
     for k, (new, old) in enumerate(zip(flags, flags_before, strict=True)):
@@ -113,7 +114,7 @@ def _chatter(problem: Problem, settings: SolverSettings, states, flags_before, c
     forensics["gauss_flag_changes"].append(total)
     forensics.setdefault("gauss_frozen", []).append(
         int(sum(np.count_nonzero(f) for f in frozen if f is not None)))
-    return tuple(frozen) if any_frozen else None
+    return (tuple(frozen) if any_frozen else None), flags
 
 
 def _relaxation(kind: str, iteration: int, relaxation: float, correction: np.ndarray,
@@ -176,8 +177,8 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
         ev = s.evaluate(u, start.states, frozen)
         if not np.all(np.isfinite(ev.internal_force)):
             raise StepFailed("non-finite internal forces", "NaN")
-        frozen = _chatter(problem, settings, ev.states, flags_before, changes, forensics)
-        flags_before = problem.point_flags(ev.states)
+        frozen, flags_before = _chatter(problem, settings, ev.states, flags_before, changes,
+                                        forensics)
         external = P * R + c.restrict(F_pre)
         structural = c.restrict(external - ev.internal_force)  # F_ext - F_int, no gap forces
         unbalance = structural - c.restrict(c.constraint_force())
@@ -253,7 +254,7 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
     while current < target - 1e-12 * max(1.0, abs(target)):
         goal = min(current + size, target)
         tic = time.perf_counter()
-        scheme, damp_cycles = _fallback(settings, retry)
+        scheme, damp_cycles = _schemes(settings)[retry]
         try:
             if kind == "control":
                 inc = _iterate(problem, scheme, state, goal, preload, damp_cycles)
@@ -262,8 +263,8 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
             reason = getattr(exc, "reason", "non-convergence")
-            if size <= smallest and reason == "non-convergence" and retry < (
-                    FALLBACKS if settings.acceleration != "aitken" else 1):
+            if (size <= smallest and reason == "non-convergence"
+                    and retry < len(_schemes(settings)) - 1):
                 # the damped relaxation can crawl where another scheme gets through: retry
                 # the smallest step with each fallback (same equilibrium, same tolerances)
                 retry += 1
@@ -323,15 +324,19 @@ JUMP_FACTOR = 2.0
 """A jump over a stall is one step of this many control increments (settings.max_jumps)."""
 
 FALLBACKS = 2
-"""Iteration schemes tried, in turn, on a smallest step that did not converge: 1 the halving
-relaxation without the cycle damping, 2 Aitken's relaxation (unless that is the setting)."""
+"""Iteration schemes tried at most, in turn, on a smallest step that did not converge."""
 
 
-def _fallback(settings: SolverSettings, retry: int) -> tuple[SolverSettings, bool]:
-    """Settings and cycle damping of fallback `retry` (0: the deck's own scheme)."""
-    if retry == 2 and settings.acceleration != "aitken":
-        return replace(settings, acceleration="aitken"), True
-    return settings, retry != 1
+def _schemes(settings: SolverSettings) -> list[tuple[SolverSettings, bool]]:
+    """(settings, cycle damping) of the deck's own scheme and of each fallback that differs
+    from it: the halving relaxation without the cycle damping (only the halving scheme reads
+    it), then Aitken's relaxation (unless that is the setting)."""
+    schemes = [(settings, True)]
+    if settings.acceleration == "halving":
+        schemes.append((settings, False))
+    if settings.acceleration != "aitken":
+        schemes.append((replace(settings, acceleration="aitken"), True))
+    return schemes
 
 
 def _abrupt_drop(state: PathState, inc: Increment, peak_load: float) -> bool:

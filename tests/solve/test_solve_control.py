@@ -10,7 +10,7 @@ from softening_bar import bar_problem, settings
 
 from icewall.errors import ConvergenceError
 from icewall.solve import control
-from icewall.solve.control import FALLBACKS, _fallback, follow_path
+from icewall.solve.control import FALLBACKS, _schemes, follow_path
 
 
 def analytic_softening_load(deflection, length, h, E, f_weak, failure_strain, area=10.0):
@@ -90,12 +90,17 @@ def test_fallback_schemes_on_the_smallest_step():
     """A smallest step that does not converge is retried with the undamped halving
     relaxation, then with Aitken's; tolerances and everything else stay the deck's."""
     base = settings(1.0, 0.1)
-    schemes = [_fallback(base, retry) for retry in range(FALLBACKS + 1)]
+    schemes = _schemes(base)
+    assert len(schemes) == FALLBACKS + 1
     assert [(s.acceleration, damp) for s, damp in schemes] == [
         ("halving", True), ("halving", False), ("aitken", True)]
     for scheme, _ in schemes:
         assert (scheme.tolerance_load, scheme.tolerance_displacement, scheme.max_iterations) == (
             base.tolerance_load, base.tolerance_displacement, base.max_iterations)
+    # a fallback that would repeat the failed iteration exactly is not tried
+    assert [(s.acceleration, damp) for s, damp in _schemes(replace(base, acceleration="none"))
+            ] == [("none", True), ("aitken", True)]
+    assert len(_schemes(replace(base, acceleration="aitken"))) == 1
 
 
 def _stall_between(monkeypatch, low: float, high: float) -> list[float]:
