@@ -20,7 +20,7 @@ import importlib
 import os
 import warnings
 from abc import ABC, abstractmethod
-from functools import cache
+from functools import cache, cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -95,6 +95,11 @@ class SparseLU(ABC):
     def __init__(self, A: sp.csc_matrix) -> None:
         self.A = A
 
+    @cached_property
+    def norm_A(self) -> float:
+        """max |A_ij|, the |A| of the residual check (computed once, when first needed)."""
+        return float(np.abs(self.A.data).max(initial=0.0))
+
     @abstractmethod
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """x with A x = rhs (unchecked)."""
@@ -103,8 +108,7 @@ class SparseLU(ABC):
         """x is finite and leaves residuals below RESIDUAL_RTOL (|A| |x| + |b|) in every
         column (the check of the backends without pivot access)."""
         residual = np.abs(b - self.A @ x).max(axis=0)
-        norm_A = float(np.abs(self.A.data).max(initial=0.0))
-        scale = norm_A * np.abs(x).max(axis=0) + np.abs(b).max(axis=0)
+        scale = self.norm_A * np.abs(x).max(axis=0) + np.abs(b).max(axis=0)
         return bool(np.all(np.isfinite(x)) and np.all(residual <= RESIDUAL_RTOL * scale))
 
 
