@@ -167,6 +167,7 @@ class CylinderCurve:
     run_time: float  # s
     gauss_stress: np.ndarray  # (n_el, nq, 4) at the last step
     displacement: np.ndarray  # (n_nodes, 2) at the last step
+    gauss_spacing: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (n_el,) eq. 4.3
 
     @property
     def peak_index(self) -> int:
@@ -242,4 +243,5 @@ def run_cylinder(case: CylinderCase, stages: tuple[tuple[float, float], ...] = (
         np.array(strain), np.array(stress), np.array(iterations), snaps, jumped, stopped,
         time.perf_counter() - tic,
         gauss_stress=np.zeros((0, 0, 4)) if last is None else last.stress,
-        displacement=state.u[model.numbering.node_equations])
+        displacement=state.u[model.numbering.node_equations],
+        gauss_spacing=model.gauss_spacing)
