@@ -219,11 +219,13 @@ def take_parameters(params: Any, index: np.ndarray, n_points: int) -> Any:
 
 
 def concrete_tangent(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
-                     relative_step: float = 1e-7) -> np.ndarray:
+                     relative_step: float = 1e-7, trial_stress: str = "incremental",
+                     frozen: np.ndarray | None = None) -> np.ndarray:
     """Algorithmic tangent d sigma / d eps (n, 4, 4) of `update_concrete` by forward differences.
 
     Vectorised: one batched update of 4n (plane stress: 3n) perturbed points. The step is
     relative_step times the strain size (at least 1e-10). Plane stress: zz row/column zero.
+    `trial_stress` and `frozen` as in `update_concrete`: the tangent of the same map.
     """
     strain = np.asarray(strain, dtype=float).reshape(-1, 4)
     n = strain.shape[0]
@@ -231,13 +233,15 @@ def concrete_tangent(strain: np.ndarray, state: ConcreteState, params: Any, form
     if formulation == "plane_strain":
         columns = [0, 1, 3]
     step = relative_step * np.maximum(np.abs(strain).max(axis=1), 1e-3)
-    base, _, _ = update_concrete(strain, state, params, formulation)
+    base, _, _ = update_concrete(strain, state, params, formulation, trial_stress, frozen)
     perturbed = np.repeat(strain[None], len(columns), axis=0)  # (k, n, 4)
     for k, j in enumerate(columns):
         perturbed[k, :, j] += step
     index = np.tile(np.arange(n), len(columns))
     stressed, _, _ = update_concrete(perturbed.reshape(-1, 4), state.take(index),
-                                     take_parameters(params, index, n), formulation)
+                                     take_parameters(params, index, n), formulation,
+                                     trial_stress, None if frozen is None
+                                     else np.asarray(frozen, dtype=bool)[index])
     difference = (stressed.reshape(len(columns), n, 4) - base[None]) / step[None, :, None]
     tangent = np.zeros((n, 4, 4))
     for k, j in enumerate(columns):

@@ -185,7 +185,8 @@ def _solve_increment(path: _Path, prescribed: np.ndarray, guess: np.ndarray,
         if np.abs(residual).max() <= tolerance:
             return strain, stress[0], trial, iteration
         if iteration >= max_iterations // 3:  # secant stalls (e.g. softening): tangent
-            moduli = concrete_tangent(strain[None], state, params, formulation)
+            moduli = concrete_tangent(strain[None], state, params, formulation,
+                                      trial_stress=trial_stress)
         jacobian = path.conditions @ moduli[0][:, path.free]
         try:
             correction = np.linalg.solve(jacobian, residual)

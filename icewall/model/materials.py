@@ -137,7 +137,8 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
                                                            max_step, trial_stress=trial_kind,
                                                            frozen=frozen)
         if tangent:
-            moduli = concrete_tangent(strain, state, p, formulation)
+            moduli = concrete_tangent(strain, state, p, formulation, trial_stress=trial_kind,
+                                      frozen=frozen)
         elif floor > 0.0 or coaxial:
             moduli = floored_moduli(trial, p, formulation, floor, coaxial)
         return stress, moduli, trial

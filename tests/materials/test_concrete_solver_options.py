@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from icewall.materials.concrete import update_concrete
+from icewall.materials.concrete import concrete_tangent, update_concrete
 from icewall.materials.concrete_state import ConcreteState
 from icewall.materials.parameters import derive_concrete_parameters
 from icewall.materials.point import run_path
@@ -151,3 +151,22 @@ def test_substepping_converges_to_the_fine_path():
                                            max_substeps=64)
     assert np.abs(sub - fine).max() < np.abs(coarse - fine).max()
     assert np.abs(sub - fine).max() < 0.1 * np.abs(fine).max()
+
+
+def test_tangent_differentiates_the_chosen_trial_form():
+    """concrete_tangent(trial_stress=...) is the derivative of that form's update (on a
+    cracked point whose axes rotate, where the forms differ)."""
+    state = ConcreteState.initial(1, PARAMS)
+    for strain in ([4e-3, 0.0, 0.0, 0.0], [4e-3, -1.0e-3, 0.0, 0.0]):
+        _, _, state = update_concrete(np.array([strain]), state, PARAMS, "plane_stress",
+                                      "corotational")
+    strain = np.array([[4e-3, -1.0e-3, 0.0, 6e-4]])
+    step = np.array([[0.0, 0.0, 0.0, 1e-9]])
+    tangents = {}
+    for trial in ("corotational", "incremental"):
+        tangent = concrete_tangent(strain, state, PARAMS, "plane_stress", trial_stress=trial)
+        a, _, _ = update_concrete(strain, state, PARAMS, "plane_stress", trial)
+        b, _, _ = update_concrete(strain + step, state, PARAMS, "plane_stress", trial)
+        assert np.allclose((b - a)[0] / 1e-9, tangent[0, :, 3], rtol=1e-3, atol=1.0)
+        tangents[trial] = tangent
+    assert not np.allclose(tangents["corotational"], tangents["incremental"], rtol=1e-3)
