@@ -128,8 +128,10 @@ def test_outputs_not_asked_for_are_neither_computed_nor_written(tmp_path, monkey
         assert list(f["steps/00002/gauss"]) == ["stress"]
 
 
-def test_run_imports_neither_matplotlib_nor_dask(tmp_path):
-    """`icewall run` works with matplotlib and dask made unimportable, and loads neither."""
+@pytest.mark.parametrize("solver", ["nonlinear", "linear"])
+def test_run_imports_neither_matplotlib_nor_dask(tmp_path, solver):
+    """`icewall run` works with matplotlib and dask made unimportable, and loads neither
+    (while the plotting commands stay registered)."""
     script = f"""
 import sys
 class Block:
@@ -140,10 +142,12 @@ sys.meta_path.insert(0, Block())
 from icewall.cli import main
 try:
     main(["run", {str(DECKS / "cf4.yaml")!r}, "-q", "-o", {str(tmp_path / "r.h5")!r},
-          "--set", "analysis.element_size=150", "--set", "loads.control.target=1"])
+          "--set", "analysis.element_size=150", "--set", "loads.control.target=1",
+          "--set", "analysis.solver={solver}"])
 except SystemExit as exc:
     assert not exc.code, exc.code
 print(sorted(m for m in sys.modules if m.split(".")[0] in ("matplotlib", "dask")))
+assert "icewall.cli_post" in sys.modules  # the plotting commands are still registered
 """
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                          timeout=300)
