@@ -185,12 +185,12 @@ def measure_run(path: str, residual_at: float = RESIDUAL_DEFLECTION) -> dict:
     from icewall.analysis.extract import extract
     from icewall.results.reader import open_result
 
-    fig = extract(path, residual_deflection=residual_at)
     with open_result(path) as res:
         hist, attrs, mesh = res.history, res.attrs, res.mesh
+    fig = extract(hist, residual_deflection=residual_at)  # the history read once, here
     d, p = hist["control_displacement"], hist["load"]
     control = hist["preload_stage"] != 1 if "preload_stage" in hist else np.ones(d.size, bool)
-    d0 = float(d[~control][-1]) if (~control).any() else 0.0
+    d0 = fig["start_deflection"]
     curve = (np.concatenate([[d0], d[control]]), np.concatenate([[0.0], p[control]]))
     core = mesh.cells_of_kind("concrete")
     xy = mesh.points[mesh.cells[core]]
