@@ -277,15 +277,12 @@ def schema(output: str | None) -> None:
         click.echo(text, nl=False)
 
 
-from icewall.cli_study import convergence  # noqa: E402  (registered after main is defined)
+# commands in their own modules (registered after main and _handle_errors are defined)
+from icewall.cli_post import export, plot, report  # noqa: E402
+from icewall.cli_study import convergence  # noqa: E402
 
-convergence.callback = _handle_errors(convergence.callback)
-main.add_command(convergence)
-
-
-from icewall.cli_post import export, plot, report  # noqa: E402  (post-processing commands)
-
-for _command in (plot, export, report):
+for _command in (plot, export, report, convergence):
+    _command.callback = _handle_errors(_command.callback)
     main.add_command(_command)
 
 if __name__ == "__main__":  # pragma: no cover

@@ -3,7 +3,6 @@ group by icewall.cli). Heavy imports (matplotlib, meshio) happen inside the comm
 
 from __future__ import annotations
 
-import functools
 import sys
 from pathlib import Path
 
@@ -12,18 +11,6 @@ import click
 from icewall.errors import ResultError
 
 PLOTS = ("curves", "cracks", "deformed", "trajectories", "plates", "interface")
-
-
-def _handled(func):
-    """icewall.cli's error handling (one line, exit code), imported when the command runs."""
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        from icewall.cli import _handle_errors
-
-        return _handle_errors(func)(*args, **kwargs)
-
-    return wrapper
 
 
 def _deflections(text: str) -> list[float | str]:
@@ -74,7 +61,6 @@ def _step_figures(path: str, kinds: list[str], where: float | str, scale: float 
 @click.option("--format", "formats", default="png,svg", show_default=True,
               help="Comma-separated: png, svg.")
 @click.option("--label", "labels", multiple=True, help="Curve label per result (repeatable).")
-@_handled
 def plot(results: tuple[str, ...], kinds: str, at: str, scale: float | None, outdir: str,
          formats: str, labels: tuple[str, ...]) -> None:
     """Plot RESULTS (needs the `plot` extra: matplotlib): load-deflection curves of all of
@@ -119,7 +105,6 @@ def plot(results: tuple[str, ...], kinds: str, at: str, scale: float | None, out
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Collection file (.pvd) [default: RESULT_paraview.pvd beside RESULT]; the "
                    ".vtu files go into the folder of the same name.")
-@_handled
 def export(result: str, output: str | None) -> None:
     """Export RESULT for ParaView: a time series (.pvd + one .vtu per stored step) of the mesh,
     nodal displacements, interface state and cell means of the Gauss fields."""
@@ -134,7 +119,6 @@ def export(result: str, output: str | None) -> None:
 @click.option("-o", "--output", default="report.html", show_default=True,
               type=click.Path(dir_okay=False), help="HTML file to write.")
 @click.option("--title", default=None, help="Page title.")
-@_handled
 def report(results: tuple[str, ...], output: str, title: str | None) -> None:
     """One self-contained HTML page for RESULTS (needs matplotlib): validation table against
     the tests, CSA S474 ductility, curves against the tests, crack patterns at peak and 40 mm."""
