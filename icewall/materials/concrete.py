@@ -40,6 +40,8 @@ from icewall.materials.orthotropic import (
     global_moduli,
     global_stress,
     local_normal_components,
+    local_shear_strain,
+    local_shear_stress_global,
     orthotropic_normal_stiffness,
     principal_strain_angle,
     tension_poisson_ratio,
@@ -101,6 +103,12 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
 
     # Steps 1-2: new axes; committed stress and strain increment referred to them (errata 1.3).
     angle = principal_strain_angle(strain, state.angle)
+    frozen_column = None if frozen is None else np.asarray(frozen, dtype=bool)[:, None]
+    if frozen_column is not None:
+        # a frozen point keeps its axes for the rest of the increment (a fixed crack with shear
+        # retention, below): near a 45-degree rotation the nearest labelling of the principal
+        # axes swaps between iterates and, with it, the committed stresses and damage
+        angle = np.where(frozen_column[:, 0], state.angle, angle)
     if trial_stress == "corotational":  # committed principal values carried with the axes
         strain_increment = (local_normal_components(strain, angle, 1.0)
                             - local_normal_components(state.strain, state.angle, 1.0))
@@ -150,11 +158,18 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         uniaxial_strength = np.where(eps_u[rows] > 0.0, params.ft, -params.fc)
         uniaxial_stress, _ = _envelope(eps_u[rows], uniaxial_strength, np.where(
             eps_u[rows] > 0.0, params.eps_t, -params.eps_c), params, rows)
-        loading[rows] |= sign_change[rows] & (secant_line[rows] > uniaxial_stress * (1 + 1e-9))
+        crossing = secant_line[rows] > uniaxial_stress * (1 + 1e-9)
+        # a direction past its peak on the other sign's branch (cracked, now closing in
+        # compression, or crushed, now in tension) loads only where its secant line meets the
+        # new envelope: its max |eps_iu| belongs to the other branch, and loading onto this
+        # branch at that magnitude makes the stress jump (a closing crack leapt from its crack
+        # secant to the compression envelope: VTT1 cycled between the two at 38.6 mm)
+        damaged = (state.cracked | state.crushed)[rows] & sign_change[rows]
+        loading[rows] = np.where(damaged, crossing, loading[rows] | (sign_change[rows]
+                                                                      & crossing))
     # on the same branch the secant never grows (damage is irreversible; the thesis is silent):
     # where the surface now gives a larger sigma_ic, load along the current secant instead
     heal = ~sign_change & (envelope_secant > state.secant_modulus)
-    frozen_column = None if frozen is None else np.asarray(frozen, dtype=bool)[:, None]
     if frozen_column is not None:  # the solver's chatter damping: no damage grows here
         held = loading & ~heal & frozen_column
         loading &= ~held
@@ -179,6 +194,9 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
 
     beyond_peak = loading & (magnitude > np.abs(peak_strain))
     stress = global_stress(local_stress, angle)
+    if frozen_column is not None:  # held axes: the shear strain in them meets G12 (eq. 3.21)
+        stress += local_shear_stress_global(shear_modulus * np.where(
+            frozen_column[:, 0], local_shear_strain(strain, angle), 0.0), angle)
 
     # Steps 7-8: secant moduli in global axes.
     new_stiffness = orthotropic_normal_stiffness(secant_modulus, poisson_ratio)

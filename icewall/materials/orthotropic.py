@@ -60,6 +60,21 @@ def local_normal_components(vector: np.ndarray, angle: np.ndarray, shear_factor:
     return np.stack([cc * xx + ss * yy + cs * xy, ss * xx + cc * yy - cs * xy, zz], axis=1)
 
 
+def local_shear_strain(strain: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Engineering shear strain (n,) in the local axes (T_eps row 4); zero in principal axes."""
+    c, s = np.cos(angle), np.sin(angle)
+    return (2.0 * c * s * (strain[:, 1] - strain[:, 0])
+            + (c * c - s * s) * strain[:, 3])
+
+
+def local_shear_stress_global(shear_stress: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Global components (n, 4) of a local shear stress tau_12 (n,): T_eps^T [0, 0, 0, tau]."""
+    c, s = np.cos(angle), np.sin(angle)
+    cs = c * s
+    return np.stack([-2.0 * cs * shear_stress, 2.0 * cs * shear_stress,
+                     np.zeros_like(shear_stress), (c * c - s * s) * shear_stress], axis=1)
+
+
 def global_stress(principal: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """sigma_g = T_eps^T [s1, s2, s3, 0] (n, 4): local shear stress reset to zero (§3.2.6)."""
     c, s = np.cos(angle), np.sin(angle)

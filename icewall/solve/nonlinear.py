@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from icewall.errors import ResultError
+from icewall.materials.orthotropic import local_normal_components
 from icewall.model.build import Model
 from icewall.model.materials import MaterialGroup, build_groups
 from icewall.model.structure import Evaluation, Structure
@@ -52,14 +53,20 @@ def point_flags(groups: tuple[MaterialGroup, ...], states) -> tuple[np.ndarray |
     """Per group, the flags of each point whose switching within an increment the solver
     counts as chatter, (n, k): concrete: cracked, crushed, and loading on a descending branch
     (per direction: the loading/unloading decision beyond the peak, the classic limit cycle
-    of a secant iteration on softening); steel: yielded."""
+    of a secant iteration on softening), and which labelling of the principal axes it took;
+    steel: yielded."""
     flags = []
     for group, state in zip(groups, states, strict=True):
         if group.model == "rotating_crack":
             magnitude = np.abs(state.equivalent_uniaxial_strain)
             softening = ((magnitude >= state.max_equivalent_uniaxial_strain)
                          & (magnitude > np.abs(state.uniaxial_peak_strain)))
-            flags.append(np.concatenate([state.cracked, state.crushed, softening], axis=1))
+            # which labelling of the principal axes the point took: the one nearest the
+            # committed axes swaps where the axes rotate by 45 degrees
+            local_strain = local_normal_components(state.strain, state.angle, 1.0)
+            major_on_1 = (local_strain[:, 0] >= local_strain[:, 1])[:, None]
+            flags.append(np.concatenate([state.cracked, state.crushed, softening, major_on_1],
+                                        axis=1))
         elif group.model == "von_mises":
             flags.append(np.asarray(state.yielded).reshape(-1, 1))
         else:

@@ -170,3 +170,63 @@ def test_tangent_differentiates_the_chosen_trial_form():
         assert np.allclose((b - a)[0] / 1e-9, tangent[0, :, 3], rtol=1e-3, atol=1.0)
         tangents[trial] = tangent
     assert not np.allclose(tangents["corotational"], tangents["incremental"], rtol=1e-3)
+
+
+def _rotated(principal: tuple[float, float], angle_deg: float) -> np.ndarray:
+    """Global strain (1, 4) (engineering shear) with in-plane principal strains `principal`,
+    the first along `angle_deg`."""
+    a = np.radians(angle_deg)
+    e1, e2 = principal
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[e1 * c * c + e2 * s * s, e1 * s * s + e2 * c * c, 0.0,
+                      2.0 * (e1 - e2) * c * s]])
+
+
+def test_frozen_point_keeps_its_axes_across_the_45_degree_swap():
+    """Past a 45-degree rotation the nearest labelling of the principal axes swaps: the
+    corotational trial stress jumps (the committed principal stresses change axes), a
+    discontinuity that made the secant iteration cycle (VTT1 at 12.7 mm). A frozen point keeps
+    its committed axes, carries the shear strain in them with G12 (eq. 3.21), and its stress is
+    continuous across the swap."""
+    state = ConcreteState.initial(1, PARAMS)
+    committed_strain = np.array([[-0.6 * PARAMS.eps_c, 0.1 * PARAMS.eps_c, 0.0, 0.0]])
+    _, _, state = update_concrete(committed_strain, state, PARAMS, "plane_strain", "corotational")
+    principal = (-0.6 * PARAMS.eps_c, 0.1 * PARAMS.eps_c)
+
+    def path(frozen=None):  # stresses at 42, 44 and 46 degrees, and the states
+        out = [update_concrete(_rotated(principal, a), state, PARAMS, "plane_strain",
+                               "corotational", frozen=frozen) for a in (42.0, 44.0, 46.0)]
+        return np.array([o[0][0] for o in out]), [o[2] for o in out]
+
+    def kink(stresses):  # second difference: zero on a smooth path sampled evenly
+        return np.abs(stresses[2] - 2.0 * stresses[1] + stresses[0]).max()
+
+    free, _ = path()
+    held, held_states = path(np.array([True]))
+    assert kink(free) > 1.0  # MPa: the swap (sigma_zz alone jumps by 2 MPa)
+    assert kink(held) < 0.1
+    assert all(s.angle[0] == state.angle[0] for s in held_states)
+    # the held point's shear stress is the shear strain in its committed axes times G12
+    a = np.radians(46.0)
+    gamma = 2.0 * (principal[0] - principal[1]) * np.cos(a) * np.sin(a)
+    assert held[2, 3] == pytest.approx(held_states[2].shear_modulus[0] * gamma, rel=1e-9)
+
+
+def test_a_closing_crack_meets_the_compression_envelope_continuously():
+    """A direction cracked far past its tensile peak and then compressed follows its crack
+    secant until that line meets the compression envelope. Its max |eps_iu| was reached in
+    tension, so loading onto the compression envelope at that magnitude made the stress jump
+    from the crack secant to about E0 eps (40 MPa here); the secant iteration then cycled
+    between the two."""
+    state = ConcreteState.initial(1, PARAMS)
+    opened = 20.0 * PARAMS.eps_t
+    _, _, state = update_concrete(np.array([[opened, 0.0, 0.0, 0.0]]), state, PARAMS,
+                                  "plane_stress", "corotational")
+    assert state.cracked[0, 0]
+    closing = np.linspace(0.5, 1.5, 201) * opened  # compressive strain, through |eps_iu| = max
+    stresses = np.array([update_concrete(np.array([[-c, 0.0, 0.0, 0.0]]), state, PARAMS,
+                                         "plane_stress", "corotational")[0][0, 0]
+                         for c in closing])
+    assert np.all(stresses < 0.0)
+    assert np.abs(np.diff(stresses)).max() < 0.05  # MPa per step of 0.005 x the opening
+    assert -stresses.min() < 0.2 * PARAMS.fc  # still on the crack secant, far below f'c
