@@ -15,8 +15,10 @@ Fig. 3.12 from the committed state to the given total strain:
 4.   eps_iu = sigma_lt,i / E_i with the secant E_i (errata 1.1 on eq. 3.8: step 4, not 3.8).
 5.   sigma_ic, eps_ic from the ultimate surfaces on the ray of the trial stress (errata 1.3).
 6.   Per direction: loading (|eps_iu| beyond its maximum) follows eqs. 3.9-3.11 and updates the
-     secant E_i, nu_i (3.19-3.20); unloading keeps E_i, nu_i (Fig. 3.13). The local shear stress
-     is reset to zero (§3.2.6), G12 from eq. 3.21.
+     secant E_i, nu_i (3.19-3.20); unloading keeps E_i, nu_i (Fig. 3.13). A direction past
+     its peak on the other sign's branch (a closing crack, a crushed direction in tension)
+     loads where its secant line meets the new envelope, so its stress stays continuous.
+     The local shear stress is reset to zero (§3.2.6), G12 from eq. 3.21.
 7-8. Secant C_l from the new E, nu, G12, back to global axes (errata 1.3).
 
 Secant relation: per direction sigma_i = E_i eps_iu (except below the secant floor); in global
