@@ -17,8 +17,9 @@ GROUP = (SimpleNamespace(model="rotating_crack"),)
 
 def _softening_flag(state: ConcreteState) -> np.ndarray:
     (flags,) = point_flags(GROUP, (state,))
-    assert flags.shape == (1, 9)  # cracked (3), crushed (3), loading past the peak (3)
-    return flags[0, 6:]
+    # cracked (3), crushed (3), loading past the peak (3), labelling of the principal axes
+    assert flags.shape == (1, 10)
+    return flags[0, 6:9]
 
 
 def test_loading_past_the_peak_is_flagged_and_unloading_is_not():
@@ -37,3 +38,25 @@ def test_loading_past_the_peak_is_flagged_and_unloading_is_not():
     assert flags == [False, True, True]
     assert not _softening_flag(unloaded)[0]
     assert state.crushed[0, 0] and unloaded.crushed[0, 0]  # the crush flag alone cannot tell
+
+
+def test_the_labelling_of_the_principal_axes_is_a_flag():
+    """Past a 45-degree rotation of the principal strains the axis nearest the committed
+    direction 1 carries the minor strain: the flag switches (a point whose iterates swap
+    labellings is counted as chattering and then held, see test_concrete_solver_options)."""
+    state = ConcreteState.initial(1, PARAMS)
+    _, _, state = update_concrete(np.array([[-1e-3, 2e-4, 0.0, 0.0]]), state, PARAMS,
+                                  "plane_strain", "corotational")
+    labels = []
+    for degrees in (30.0, 44.0, 46.0, 60.0):
+        a = np.radians(degrees)
+        c, s = np.cos(a), np.sin(a)
+        e1, e2 = -1e-3, 2e-4  # the compressive strain first, along the angle
+        strain = np.array([[e1 * c * c + e2 * s * s, e1 * s * s + e2 * c * c, 0.0,
+                            2.0 * (e1 - e2) * c * s]])
+        _, _, trial = update_concrete(strain, state, PARAMS, "plane_strain", "corotational")
+        (flags,) = point_flags(GROUP, (trial,))
+        labels.append(bool(flags[0, 9]))
+    (committed,) = point_flags(GROUP, (state,))
+    assert labels[0] == labels[1] == bool(committed[0, 9])
+    assert labels[2] == labels[3] != labels[1]
