@@ -43,7 +43,6 @@ from icewall.materials.orthotropic import (
     global_stress,
     local_normal_components,
     local_shear_strain,
-    local_shear_stress_global,
     orthotropic_normal_stiffness,
     principal_strain_angle,
     tension_poisson_ratio,
@@ -166,9 +165,9 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         # new envelope: its max |eps_iu| belongs to the other branch, and loading onto this
         # branch at that magnitude makes the stress jump (a closing crack leapt from its crack
         # secant to the compression envelope: VTT1 cycled between the two at 38.6 mm)
-        damaged = (state.cracked | state.crushed)[rows] & sign_change[rows]
-        loading[rows] = np.where(damaged, crossing, loading[rows] | (sign_change[rows]
-                                                                      & crossing))
+        damaged = state.cracked[rows] | state.crushed[rows]
+        loading[rows] = (loading[rows] & ~(damaged & sign_change[rows])
+                         | sign_change[rows] & crossing)
     # on the same branch the secant never grows (damage is irreversible; the thesis is silent):
     # where the surface now gives a larger sigma_ic, load along the current secant instead
     heal = ~sign_change & (envelope_secant > state.secant_modulus)
@@ -195,10 +194,9 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     shear_modulus = secant_modulus[:, :2].min(axis=1) / (2.0 * (1.0 + nu0))
 
     beyond_peak = loading & (magnitude > np.abs(peak_strain))
-    stress = global_stress(local_stress, angle)
-    if frozen_column is not None:  # held axes: the shear strain in them meets G12 (eq. 3.21)
-        stress += local_shear_stress_global(shear_modulus * np.where(
-            frozen_column[:, 0], local_shear_strain(strain, angle), 0.0), angle)
+    # held axes (frozen points): the shear strain in them meets G12 (eq. 3.21)
+    stress = global_stress(local_stress, angle, None if frozen_column is None else np.where(
+        frozen_column[:, 0], shear_modulus * local_shear_strain(strain, angle), 0.0))
 
     # Steps 7-8: secant moduli in global axes.
     new_stiffness = orthotropic_normal_stiffness(secant_modulus, poisson_ratio)

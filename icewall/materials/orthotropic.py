@@ -67,20 +67,26 @@ def local_shear_strain(strain: np.ndarray, angle: np.ndarray) -> np.ndarray:
             + (c * c - s * s) * strain[:, 3])
 
 
-def local_shear_stress_global(shear_stress: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """Global components (n, 4) of a local shear stress tau_12 (n,): T_eps^T [0, 0, 0, tau]."""
-    c, s = np.cos(angle), np.sin(angle)
-    cs = c * s
-    return np.stack([-2.0 * cs * shear_stress, 2.0 * cs * shear_stress,
-                     np.zeros_like(shear_stress), (c * c - s * s) * shear_stress], axis=1)
-
-
-def global_stress(principal: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """sigma_g = T_eps^T [s1, s2, s3, 0] (n, 4): local shear stress reset to zero (§3.2.6)."""
+def global_stress(principal: np.ndarray, angle: np.ndarray,
+                  shear: np.ndarray | None = None) -> np.ndarray:
+    """sigma_g = T_eps^T [s1, s2, s3, tau] (n, 4); the local shear stress tau (n,) is zero
+    unless given (reset to zero for each increment, §3.2.6)."""
     c, s = np.cos(angle), np.sin(angle)
     cc, ss, cs = c * c, s * s, c * s
     s1, s2, s3 = principal[:, 0], principal[:, 1], principal[:, 2]
-    return np.stack([cc * s1 + ss * s2, ss * s1 + cc * s2, s3, cs * (s1 - s2)], axis=1)
+    stress = np.stack([cc * s1 + ss * s2, ss * s1 + cc * s2, s3, cs * (s1 - s2)], axis=1)
+    if shear is not None:
+        stress[:, 0] -= 2.0 * cs * shear
+        stress[:, 1] += 2.0 * cs * shear
+        stress[:, 3] += (cc - ss) * shear
+    return stress
+
+
+def global_strain(principal: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Global strain (n, 4), engineering shear, with principal strains (n, 3) along angle."""
+    strain = global_stress(principal, angle)
+    strain[:, 3] *= 2.0
+    return strain
 
 
 def orthotropic_normal_stiffness(modulus: np.ndarray, poisson: np.ndarray) -> np.ndarray:

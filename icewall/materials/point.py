@@ -29,6 +29,7 @@ import numpy as np
 from icewall.errors import ConvergenceError
 from icewall.materials.concrete import concrete_tangent, update_concrete
 from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.orthotropic import global_strain
 
 PATHS = ("uniaxial-compression", "uniaxial-tension", "biaxial:R", "biaxial-tension:R",
          "biaxial-strain:R", "pure-shear", "rotating")
@@ -122,10 +123,8 @@ class _Path:
         elif self.kind == "rotating":
             ramp, turn = min(2.0 * fraction, 1.0), max(2.0 * fraction - 1.0, 0.0)
             theta = 0.5 * np.pi * turn
-            e1, e2 = 0.25 * t * ramp, -t * ramp
-            c, s = np.cos(theta), np.sin(theta)
-            strain[:] = (c * c * e1 + s * s * e2, s * s * e1 + c * c * e2, 0.0,
-                         2.0 * c * s * (e1 - e2))
+            strain[:] = global_strain(np.array([[0.25 * t * ramp, -t * ramp, 0.0]]),
+                                      np.array([theta]))[0]
         else:
             strain[0] = self.sign * t
         return strain

@@ -8,6 +8,7 @@ import pytest
 
 from icewall.materials.concrete import concrete_tangent, update_concrete
 from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.orthotropic import global_strain
 from icewall.materials.parameters import derive_concrete_parameters
 from icewall.materials.point import run_path
 from icewall.materials.substep import update_concrete_substepped
@@ -173,13 +174,9 @@ def test_tangent_differentiates_the_chosen_trial_form():
 
 
 def _rotated(principal: tuple[float, float], angle_deg: float) -> np.ndarray:
-    """Global strain (1, 4) (engineering shear) with in-plane principal strains `principal`,
-    the first along `angle_deg`."""
-    a = np.radians(angle_deg)
-    e1, e2 = principal
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[e1 * c * c + e2 * s * s, e1 * s * s + e2 * c * c, 0.0,
-                      2.0 * (e1 - e2) * c * s]])
+    """Global strain (1, 4) with in-plane principal strains `principal`, the first along
+    `angle_deg`."""
+    return global_strain(np.array([[*principal, 0.0]]), np.radians([angle_deg]))
 
 
 def test_frozen_point_keeps_its_axes_across_the_45_degree_swap():

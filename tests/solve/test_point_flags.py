@@ -8,6 +8,7 @@ import numpy as np
 
 from icewall.materials.concrete import update_concrete
 from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.orthotropic import global_strain
 from icewall.materials.parameters import derive_concrete_parameters
 from icewall.solve.nonlinear import point_flags
 
@@ -49,11 +50,8 @@ def test_the_labelling_of_the_principal_axes_is_a_flag():
                                   "plane_strain", "corotational")
     labels = []
     for degrees in (30.0, 44.0, 46.0, 60.0):
-        a = np.radians(degrees)
-        c, s = np.cos(a), np.sin(a)
-        e1, e2 = -1e-3, 2e-4  # the compressive strain first, along the angle
-        strain = np.array([[e1 * c * c + e2 * s * s, e1 * s * s + e2 * c * c, 0.0,
-                            2.0 * (e1 - e2) * c * s]])
+        # the compressive principal strain along the angle
+        strain = global_strain(np.array([[-1e-3, 2e-4, 0.0]]), np.radians([degrees]))
         _, _, trial = update_concrete(strain, state, PARAMS, "plane_strain", "corotational")
         (flags,) = point_flags(GROUP, (trial,))
         labels.append(bool(flags[0, 9]))
