@@ -84,20 +84,31 @@ def element_kinematics(points: np.ndarray, cells: np.ndarray, cell_type: str,
 
 
 def stiffness_blocks(kin: ElementKinematics, moduli: np.ndarray) -> np.ndarray:
-    """Element stiffness matrices sum_q B^T D B dV, shaped (n_el, nd, nd)."""
-    D = np.broadcast_to(moduli, kin.B.shape[:2] + (4, 4))
+    """Element stiffness matrices sum_q B^T D B dV, shaped (n_el, nd, nd).
+
+    One batched matmul per element over the stacked (q, i) rows: (B^T)(D B dV), with
+    (q, i) as the contracted axis (BLAS, no einsum path search per call)."""
+    n_el, nq, n_strain, nd = kin.B.shape
+    D = np.broadcast_to(moduli, (n_el, nq, n_strain, n_strain))
     DB = np.matmul(D, kin.B) * kin.dV[..., None, None]  # (e, q, 4, nd)
-    return np.einsum("eqid,eqif->edf", kin.B, DB, optimize=True)
+    B_rows = kin.B.reshape(n_el, nq * n_strain, nd)
+    return np.matmul(B_rows.transpose(0, 2, 1), DB.reshape(n_el, nq * n_strain, nd))
 
 
 def internal_force_blocks(kin: ElementKinematics, stress: np.ndarray) -> np.ndarray:
     """Element internal force vectors sum_q B^T sigma dV, shaped (n_el, nd)."""
-    return np.einsum("eqid,eqi,eq->ed", kin.B, stress, kin.dV, optimize=True)
+    n_el, nq, n_strain, nd = kin.B.shape
+    weighted = (stress * kin.dV[..., None]).reshape(n_el, nq * n_strain, 1)
+    return np.matmul(kin.B.reshape(n_el, nq * n_strain, nd).transpose(0, 2, 1),
+                     weighted)[..., 0]
 
 
 def strain(kin: ElementKinematics, u_global: np.ndarray) -> np.ndarray:
     """Gauss-point strains (n_el, nq, 4) of the displacement vector indexed by kin.dofs."""
-    return np.einsum("eqid,ed->eqi", kin.B, np.asarray(u_global)[kin.dofs], optimize=True)
+    n_el, nq, n_strain, nd = kin.B.shape
+    u_element = np.asarray(u_global)[kin.dofs]  # (e, nd)
+    return np.matmul(kin.B.reshape(n_el, nq * n_strain, nd),
+                     u_element[..., None]).reshape(n_el, nq, n_strain)
 
 
 def gauss_point_spacing(points: np.ndarray, cells: np.ndarray, n_gauss: int) -> np.ndarray:

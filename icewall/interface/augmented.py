@@ -21,7 +21,7 @@ import scipy.sparse as sp
 
 from icewall.errors import ConvergenceError
 from icewall.interface.gap import FIXED, FREE, SLIP, GapState, relative_displacement, slip_force
-from icewall.solve.constraints import restricted_matrix
+from icewall.interface.pattern import AugmentedPattern
 from icewall.solve.sparse import SingularMatrixError, SparseLU
 from icewall.solve.sparse import factorize as sparse_factorize
 
@@ -84,34 +84,19 @@ def augmented_matrix(K: sp.spmatrix, C: sp.spmatrix, state: GapState,
     with s = sign(lam_T) (so lam_T = s mu |lam_N| with lam_N < 0 holds at once instead of
     lagging one iteration behind lam_N); A is then unsymmetric.
 
-    [[K_r, C_u^T], [C_a, D]] in canonical CSC without stored zeros, built in one pass from
-    column-major entry lists (a stable sort by column keeps the rows ascending).
+    [[K_r, C_u^T], [C_a, D]] in canonical CSC without stored zeros (AugmentedPattern: the
+    solver keeps the pattern for the whole run and only writes values into it).
     """
-    n_eq = K.shape[0]
-    fixed = _fixed_mask(n_eq, fixed_equations)
+    K = sp.csr_matrix(K, copy=True)
+    K.sum_duplicates()
+    return AugmentedPattern(K, C, fixed_equations).matrix(
+        K, active_rows(state), upper_rows(state, implicit_slip), state, mu, implicit_slip)
+
+
+def upper_rows(state: GapState, implicit_slip: bool = False) -> np.ndarray:
+    """(2n,) bool: the rows whose C^T stands beside K (active ones, and implicit-slip rows)."""
     active = active_rows(state)
-    upper = active | implicit_slip_rows(state) if implicit_slip else active
-    C_csc, C_csr = sp.csc_matrix(C), sp.csr_matrix(C)
-    # C_a = diag(active) C diag(free): column j of A holds C's column j below K_r's
-    a_cols = np.repeat(np.arange(n_eq), np.diff(C_csc.indptr))
-    a_keep = active[C_csc.indices] & ~fixed[a_cols]
-    # C_u^T: column n_eq + r of A holds C's row r above the multiplier block
-    u_rows = np.repeat(np.arange(C_csr.shape[0]), np.diff(C_csr.indptr))
-    u_keep = upper[u_rows] & ~fixed[C_csr.indices]
-    inactive = np.flatnonzero(~active)
-    slip = np.flatnonzero(state.state == SLIP) if implicit_slip else np.zeros(0, dtype=int)
-    K_r = restricted_matrix(K, fixed)  # column-major, rows ascending
-    k_rows, k_cols = K_r.indices, np.repeat(np.arange(n_eq), np.diff(K_r.indptr))
-    k_values = K_r.data
-    rows = np.concatenate([k_rows, n_eq + C_csc.indices[a_keep], C_csr.indices[u_keep],
-                           n_eq + inactive, n_eq + 2 * slip + 1])
-    cols = np.concatenate([k_cols, a_cols[a_keep], n_eq + u_rows[u_keep], n_eq + inactive,
-                           n_eq + 2 * slip])
-    values = np.concatenate([k_values, C_csc.data[a_keep], C_csr.data[u_keep],
-                             np.ones(inactive.size), np.sign(state.lam_T[slip]) * mu])
-    stored = values != 0.0
-    m = n_eq + C_csr.shape[0]
-    return sp.csc_matrix((values[stored], (rows[stored], cols[stored])), shape=(m, m))
+    return active | implicit_slip_rows(state) if implicit_slip else active
 
 
 def augmented_rhs(r_u: np.ndarray, u: np.ndarray, C: sp.spmatrix, state: GapState, mu: float,
@@ -183,13 +168,16 @@ def column_max_abs(A: sp.csc_matrix) -> np.ndarray:
     return np.where(counts > 0, np.maximum.reduceat(np.abs(A.data), starts), 0.0)
 
 
-def factorize(A: sp.spmatrix, backend: str | None = None) -> AugmentedFactor:
+def factorize(A: sp.spmatrix, backend: str | None = None, check_pivots: bool = True
+              ) -> AugmentedFactor:
     """LU of the augmented matrix (icewall.solve.sparse; SuperLU unless chosen otherwise);
-    ConvergenceError(reason="singular system") when singular."""
+    ConvergenceError(reason="singular system") when singular. `check_pivots`: compare SuperLU's
+    pivots with the column scales (extracting U costs about a tenth of the factorisation)."""
     A = sp.csc_matrix(A)
     A.sum_duplicates()
     try:
-        lu = sparse_factorize(A, backend, pivot_scale=column_max_abs(A), pivot_rtol=PIVOT_RTOL)
+        lu = sparse_factorize(A, backend, pivot_scale=column_max_abs(A) if check_pivots else None,
+                              pivot_rtol=PIVOT_RTOL)
     except SingularMatrixError as exc:
         if exc.columns.size:
             where = np.sort(exc.columns)[:10].tolist()

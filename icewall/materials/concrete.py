@@ -85,9 +85,11 @@ def _envelope(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.ndarray,
 
 
 def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
-                    trial_stress: str = "incremental", frozen: np.ndarray | None = None
-                    ) -> tuple[np.ndarray, np.ndarray, ConcreteState]:
-    """Stress (n, 4), secant moduli (n, 4, 4) and trial state at total strain (n, 4).
+                    trial_stress: str = "incremental", frozen: np.ndarray | None = None,
+                    with_moduli: bool = True
+                    ) -> tuple[np.ndarray, np.ndarray | None, ConcreteState]:
+    """Stress (n, 4), secant moduli (n, 4, 4; None unless `with_moduli`) and trial state at
+    total strain (n, 4).
 
     plane_strain: eps_zz = 0 is imposed and sigma_zz tracked. plane_stress: sigma_zz = 0 is
     condensed, the input eps_zz is ignored and the solved one stored in the trial state (moduli
@@ -139,12 +141,8 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         trial[:, 2] = 0.0
     eps_u = trial / state.secant_modulus
 
-    # Step 5: uniaxial parameters on the ray of the trial stress (errata 1.3, step 5).
-    strength = equivalent_uniaxial_strengths(trial, params, strain_sign=eps_u)
-    peak_strain = equivalent_uniaxial_peak_strains(strength, params)
-
-    # Step 6: loading vs unloading by max |eps_iu| per direction (errata §3, Fig. 3.13).
-    envelope_stress, envelope_secant = _envelope(eps_u, strength, peak_strain, params)
+    # Step 6 (first): loading vs unloading by max |eps_iu| per direction (errata §3,
+    # Fig. 3.13); it does not depend on the strength surface.
     magnitude = np.abs(eps_u)
     secant_line = state.secant_modulus * magnitude
     # a direction that changes sign never unloads along a secant above its new envelope
@@ -168,6 +166,20 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         damaged = state.cracked[rows] | state.crushed[rows]
         loading[rows] = (loading[rows] & ~(damaged & sign_change[rows])
                          | sign_change[rows] & crossing)
+
+    # Step 5: uniaxial parameters on the ray of the trial stress (errata 1.3, step 5), and the
+    # envelope at eps_iu. Only a loading direction reads them: the points with none keep their
+    # committed values (every use below is masked by `loading`), and skip the surface.
+    strength = state.uniaxial_strength.copy()
+    peak_strain = state.uniaxial_peak_strain.copy()
+    envelope_stress, envelope_secant = np.abs(trial), state.secant_modulus.copy()
+    loads = np.nonzero(loading.any(axis=1))[0]
+    if loads.size:
+        strength[loads] = equivalent_uniaxial_strengths(trial[loads], params,
+                                                        strain_sign=eps_u[loads])
+        peak_strain[loads] = equivalent_uniaxial_peak_strains(strength[loads], params)
+        envelope_stress[loads], envelope_secant[loads] = _envelope(
+            eps_u[loads], strength[loads], peak_strain[loads], params, loads)
     # on the same branch the secant never grows (damage is irreversible; the thesis is silent):
     # where the surface now gives a larger sigma_ic, load along the current secant instead
     heal = ~sign_change & (envelope_secant > state.secant_modulus)
@@ -198,11 +210,13 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     stress = global_stress(local_stress, angle, None if frozen_column is None else np.where(
         frozen_column[:, 0], shear_modulus * local_shear_strain(strain, angle), 0.0))
 
-    # Steps 7-8: secant moduli in global axes.
-    new_stiffness = orthotropic_normal_stiffness(secant_modulus, poisson_ratio)
-    if plane_stress:
-        new_stiffness = condense_plane_stress(new_stiffness)
-    moduli = global_moduli(new_stiffness, shear_modulus, angle)
+    # Steps 7-8: secant moduli in global axes (skipped where the caller builds its own).
+    moduli = None
+    if with_moduli:
+        new_stiffness = orthotropic_normal_stiffness(secant_modulus, poisson_ratio)
+        if plane_stress:
+            new_stiffness = condense_plane_stress(new_stiffness)
+        moduli = global_moduli(new_stiffness, shear_modulus, angle)
 
     trial_state = ConcreteState(
         strain=strain,
@@ -251,7 +265,8 @@ def concrete_tangent(strain: np.ndarray, state: ConcreteState, params: Any, form
     if formulation == "plane_strain":
         columns = [0, 1, 3]
     step = relative_step * np.maximum(np.abs(strain).max(axis=1), 1e-3)
-    base, _, _ = update_concrete(strain, state, params, formulation, trial_stress, frozen)
+    base, _, _ = update_concrete(strain, state, params, formulation, trial_stress, frozen,
+                                 with_moduli=False)
     perturbed = np.repeat(strain[None], len(columns), axis=0)  # (k, n, 4)
     for k, j in enumerate(columns):
         perturbed[k, :, j] += step
@@ -259,7 +274,8 @@ def concrete_tangent(strain: np.ndarray, state: ConcreteState, params: Any, form
     stressed, _, _ = update_concrete(perturbed.reshape(-1, 4), state.take(index),
                                      take_parameters(params, index, n), formulation,
                                      trial_stress, None if frozen is None
-                                     else np.asarray(frozen, dtype=bool)[index])
+                                     else np.asarray(frozen, dtype=bool)[index],
+                                     with_moduli=False)
     difference = (stressed.reshape(len(columns), n, 4) - base[None]) / step[None, :, None]
     tangent = np.zeros((n, 4, 4))
     for k, j in enumerate(columns):

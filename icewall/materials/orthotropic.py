@@ -138,7 +138,7 @@ def global_moduli(normal_stiffness: np.ndarray, shear_modulus: np.ndarray, angle
     local[:, :3, :3] = normal_stiffness
     local[:, 3, 3] = shear_modulus
     T = strain_rotation(angle)
-    return np.einsum("nki,nkl,nlj->nij", T, local, T, optimize=True)
+    return np.matmul(T.transpose(0, 2, 1), np.matmul(local, T))
 
 
 def compression_poisson_ratio(strain_ratio: np.ndarray, nu0: float) -> np.ndarray:

@@ -23,11 +23,12 @@ from icewall.materials.concrete_state import ConcreteState
 def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params: Any,
                                formulation: str, max_strain_step: float,
                                max_substeps: int = 32, trial_stress: str = "incremental",
-                               frozen: np.ndarray | None = None
-                               ) -> tuple[np.ndarray, np.ndarray, ConcreteState]:
+                               frozen: np.ndarray | None = None, with_moduli: bool = True
+                               ) -> tuple[np.ndarray, np.ndarray | None, ConcreteState]:
     """`update_concrete` over sub-steps of at most `max_strain_step` per point (pure)."""
     if trial_stress != "incremental":  # total / co-rotational trials are not sub-stepped
-        return update_concrete(strain, state, params, formulation, trial_stress, frozen)
+        return update_concrete(strain, state, params, formulation, trial_stress, frozen,
+                               with_moduli)
     strain = np.asarray(strain, dtype=float).reshape(-1, 4)
     n = strain.shape[0]
     increment = strain - state.strain
@@ -38,8 +39,10 @@ def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params:
     # frozen (chatter-damped) points are sub-stepped too: the map must not change form in
     # the middle of an increment when the solver starts to freeze points
     if n_sub.max() == 1:
-        return update_concrete(strain, state, params, formulation, frozen=frozen)
-    stress, moduli, trial = update_concrete(strain, state, params, formulation, frozen=frozen)
+        return update_concrete(strain, state, params, formulation, frozen=frozen,
+                               with_moduli=with_moduli)
+    stress, moduli, trial = update_concrete(strain, state, params, formulation, frozen=frozen,
+                                            with_moduli=with_moduli)
     many = np.flatnonzero(n_sub > 1)
     sub_frozen = None if frozen is None else np.asarray(frozen, dtype=bool)[many]
     current = state.take(many)
@@ -52,11 +55,13 @@ def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params:
         if formulation == "plane_stress":
             target[:, 2] = current.strain[:, 2]
         sig, D, new = update_concrete(target, current, sub_params, formulation,
-                                      frozen=sub_frozen)
+                                      frozen=sub_frozen, with_moduli=with_moduli)
         done = j > steps  # finished points keep their state
         current = new.select(~done, current) if done.any() else new
         if j == int(steps.max()):
-            stress[many], moduli[many] = sig, D
+            stress[many] = sig
+            if moduli is not None:
+                moduli[many] = D
     merged = {f.name: getattr(trial, f.name).copy() for f in fields(ConcreteState)}
     for name, value in merged.items():
         value[many] = getattr(current, name)

@@ -132,14 +132,17 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
     tangent = deck.analysis.concrete_stiffness == "tangent"
     coaxial = deck.analysis.concrete_stiffness == "secant-coaxial"
 
+    own_moduli = not tangent and (floor > 0.0 or coaxial)  # built here from the trial state
+
     def law(strain, state, p, frozen=None):
         stress, moduli, trial = update_concrete_substepped(strain, state, p, formulation,
                                                            max_step, trial_stress=trial_kind,
-                                                           frozen=frozen)
+                                                           frozen=frozen,
+                                                           with_moduli=not (tangent or own_moduli))
         if tangent:
             moduli = concrete_tangent(strain, state, p, formulation, trial_stress=trial_kind,
                                       frozen=frozen)
-        elif floor > 0.0 or coaxial:
+        elif own_moduli:
             moduli = floored_moduli(trial, p, formulation, floor, coaxial)
         return stress, moduli, trial
 

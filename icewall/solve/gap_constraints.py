@@ -13,12 +13,12 @@ import scipy.sparse as sp
 
 from icewall.interface.augmented import (
     active_rows,
-    augmented_matrix,
     augmented_rhs,
     factorize,
     interface_forces,
     reference_rhs,
     split_solution,
+    upper_rows,
 )
 from icewall.interface.gap import (
     GapState,
@@ -30,6 +30,7 @@ from icewall.interface.gap import (
     relative_displacement,
     update_states,
 )
+from icewall.interface.pattern import AugmentedPattern
 from icewall.model.build import Model
 from icewall.solve.constraints import SupportConstraints
 
@@ -66,6 +67,8 @@ class GapConstraints(SupportConstraints):
         self._CtC = (self.C.T @ self.C).tocsr()
         self.changes_in_step = np.zeros(self.n_pairs, dtype=int)
         self.frozen_pairs = 0
+        self._pattern: AugmentedPattern | None = None  # built from the first stiffness
+        self._checked_rows = b""  # packed enforced rows of the last pivot-checked matrix
 
     def begin_step(self) -> None:
         self.state = new_step(self.committed, reset_slip=self.reset_slip)
@@ -85,15 +88,28 @@ class GapConstraints(SupportConstraints):
         return self.redundant & active_rows(self.state)
 
     def factorize(self, K: sp.spmatrix):
-        if self.stabilization > 0.0:
-            # weak springs on the relative displacement of every pair, in the iteration matrix
-            # only (never in the residual): a core whose pairs are all open in some iterate
-            # does not make the matrix singular, and the converged state is unchanged
-            k = self.stabilization * float(abs(K.diagonal()).max())
-            K = K + k * self._CtC
-        A = augmented_matrix(K, self.C, self.state, self.fixed, self.mu, self.implicit_slip)
-        pad = np.concatenate([np.zeros(self.n_equations), self._redundant_active()])
-        return factorize(A + sp.diags(pad.astype(float)))
+        # weak springs on the relative displacement of every pair, in the iteration matrix
+        # only (never in the residual): a core whose pairs are all open in some iterate
+        # does not make the matrix singular, and the converged state is unchanged
+        k = (self.stabilization * float(abs(K.diagonal()).max())
+             if self.stabilization > 0.0 else 0.0)
+        if self._pattern is None or not self._pattern.fits(K):
+            K = sp.csr_matrix(K, copy=True)
+            K.sum_duplicates()
+            self._pattern = AugmentedPattern(K, self.C, self.fixed, self._CtC)
+        active = active_rows(self.state)
+        upper = upper_rows(self.state, self.implicit_slip)
+        pad = self._redundant_active().astype(float)
+        A = self._pattern.matrix(K, active, upper, self.state, self.mu, self.implicit_slip,
+                                 stabilisation_factor=k, diagonal_pad=pad)
+        # A floating core comes from the pair states: the pivots are checked whenever the set
+        # of enforced rows differs from the last one that passed (the stiffness alone, with
+        # its floored secants, does not make the matrix singular; SuperLU still reports an
+        # exactly singular one and every solve checks its residual).
+        signature = np.packbits(active | upper).tobytes()
+        factor = factorize(A, check_pivots=signature != self._checked_rows)
+        self._checked_rows = signature
+        return factor
 
     def reference_rhs(self, reference: np.ndarray) -> np.ndarray:
         return reference_rhs(reference, self.n_pairs, self.fixed)
