@@ -21,7 +21,7 @@ import scipy.sparse as sp
 
 from icewall.errors import ConvergenceError
 from icewall.interface.gap import FIXED, FREE, SLIP, GapState, relative_displacement, slip_force
-from icewall.interface.pattern import AugmentedPattern
+from icewall.interface.pattern import AugmentedPattern, canonical_csr, fixed_mask
 from icewall.solve.sparse import SingularMatrixError, SparseLU
 from icewall.solve.sparse import factorize as sparse_factorize
 
@@ -62,13 +62,6 @@ def constraint_targets(C: sp.spmatrix, u: np.ndarray, state: GapState) -> np.nda
     return np.column_stack([-gap_N, state.stick_T - gap_T]).ravel()
 
 
-def _fixed_mask(n_eq: int, fixed_equations: np.ndarray | None) -> np.ndarray:
-    mask = np.zeros(n_eq, dtype=bool)
-    if fixed_equations is not None:
-        mask[np.asarray(fixed_equations, dtype=int)] = True
-    return mask
-
-
 def implicit_slip_rows(state: GapState) -> np.ndarray:
     """(2n,) bool: the tangential rows of SLIP pairs (unknown multipliers when implicit)."""
     return np.column_stack([np.zeros(state.n_pairs, bool), state.state == SLIP]).ravel()
@@ -87,8 +80,7 @@ def augmented_matrix(K: sp.spmatrix, C: sp.spmatrix, state: GapState,
     [[K_r, C_u^T], [C_a, D]] in canonical CSC without stored zeros (AugmentedPattern: the
     solver keeps the pattern for the whole run and only writes values into it).
     """
-    K = sp.csr_matrix(K, copy=True)
-    K.sum_duplicates()
+    K = canonical_csr(K)
     return AugmentedPattern(K, C, fixed_equations).matrix(
         K, active_rows(state), upper_rows(state, implicit_slip), state, mu, implicit_slip)
 
@@ -114,7 +106,7 @@ def augmented_rhs(r_u: np.ndarray, u: np.ndarray, C: sp.spmatrix, state: GapStat
         slip_T = implicit_slip_rows(state)
         d_lam_p[slip_T] = 0.0  # unknown, not prescribed
     top = np.asarray(r_u, dtype=float) - C.T @ (state.lam + d_lam_p)  # Table 3.1 "load" column
-    top[_fixed_mask(C.shape[1], fixed_equations)] = 0.0
+    top[fixed_mask(fixed_equations, C.shape[1])] = 0.0
     bottom = np.where(active, constraint_targets(C, u, state), d_lam_p)
     if implicit_slip:
         slip = state.state == SLIP
@@ -127,7 +119,7 @@ def reference_rhs(R: np.ndarray, n_pairs: int, fixed_equations: np.ndarray | Non
                   ) -> np.ndarray:
     """Reference-load right-hand side [R*; 0] (errata §3: R* is zero in the multiplier rows)."""
     top = np.array(R, dtype=float)
-    top[_fixed_mask(top.size, fixed_equations)] = 0.0
+    top[fixed_mask(fixed_equations, top.size)] = 0.0
     return np.concatenate([top, np.zeros(2 * n_pairs)])
 
 

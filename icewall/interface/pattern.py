@@ -20,10 +20,24 @@ def _slots(keys: np.ndarray, rows: np.ndarray, cols: np.ndarray, m: int) -> np.n
     return np.searchsorted(keys, cols.astype(np.int64) * m + rows)
 
 
-def _coo(matrix: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(rows, cols, values) of a canonical CSR copy of `matrix` (CSR order)."""
+def canonical_csr(matrix: sp.spmatrix) -> sp.csr_matrix:
+    """A CSR copy with sorted indices and no duplicates (the order `matrix` fills slots in)."""
     csr = sp.csr_matrix(matrix, copy=True)
     csr.sum_duplicates()
+    return csr
+
+
+def fixed_mask(fixed: np.ndarray | None, size: int) -> np.ndarray:
+    """(size,) bool: True at the supported equations `fixed` (none if None)."""
+    mask = np.zeros(size, dtype=bool)
+    if fixed is not None:
+        mask[np.asarray(fixed, dtype=int)] = True
+    return mask
+
+
+def _coo(matrix: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rows, cols, values) of `matrix` in canonical CSR order."""
+    csr = canonical_csr(matrix)
     rows = np.repeat(np.arange(csr.shape[0]), np.diff(csr.indptr))
     return rows, csr.indices.astype(np.int64), csr.data
 
@@ -42,7 +56,7 @@ class AugmentedPattern:
         n_eq, n_rows = K.shape[0], C.shape[0]
         m = self.size = n_eq + n_rows
         self.n_eq = n_eq
-        K = sp.csr_matrix(K)
+        K = canonical_csr(K)
         self._k_indptr, self._k_indices = K.indptr.copy(), K.indices.copy()
         k_rows, k_cols, _ = _coo(K)
         c_rows, c_cols, self._c_values = _coo(C)
@@ -62,20 +76,13 @@ class AugmentedPattern:
         self._beside = _slots(keys, c_cols, n_eq + c_rows, m)  # C_u^T: beside K
         self._multiplier_diagonal = _slots(keys, diagonal[n_eq:], diagonal[n_eq:], m)
         self._slip = _slots(keys, slip_rows + 1, slip_rows, m)
-        self._c_row, self._c_free = c_rows, ~self._is_fixed(fixed, n_eq)[c_cols]
+        self._c_row, self._c_free = c_rows, ~fixed_mask(fixed, n_eq)[c_cols]
         # entries in a supported row or column of the stiffness block, and its diagonal there
-        is_fixed = self._is_fixed(fixed, m)
+        is_fixed = fixed_mask(fixed, m)
         all_rows, all_cols = self.indices, np.repeat(diagonal, np.diff(self.indptr))
         self._supported = np.flatnonzero(is_fixed[all_rows] | is_fixed[all_cols])
         self._supported_diagonal = _slots(keys, diagonal[is_fixed], diagonal[is_fixed], m)
         self.nnz = keys.size
-
-    @staticmethod
-    def _is_fixed(fixed: np.ndarray | None, size: int) -> np.ndarray:
-        mask = np.zeros(size, dtype=bool)
-        if fixed is not None:
-            mask[np.asarray(fixed, dtype=int)] = True
-        return mask
 
     def fits(self, K: sp.spmatrix) -> bool:
         """Whether K (CSR) has the stiffness pattern this was built for."""

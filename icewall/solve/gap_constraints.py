@@ -30,7 +30,7 @@ from icewall.interface.gap import (
     relative_displacement,
     update_states,
 )
-from icewall.interface.pattern import AugmentedPattern
+from icewall.interface.pattern import AugmentedPattern, canonical_csr
 from icewall.model.build import Model
 from icewall.solve.constraints import SupportConstraints
 
@@ -68,7 +68,7 @@ class GapConstraints(SupportConstraints):
         self.changes_in_step = np.zeros(self.n_pairs, dtype=int)
         self.frozen_pairs = 0
         self._pattern: AugmentedPattern | None = None  # built from the first stiffness
-        self._checked_rows = b""  # packed enforced rows of the last pivot-checked matrix
+        self._checked_states = b""  # pair states of the last pivot-checked matrix
 
     def begin_step(self) -> None:
         self.state = new_step(self.committed, reset_slip=self.reset_slip)
@@ -94,21 +94,19 @@ class GapConstraints(SupportConstraints):
         k = (self.stabilization * float(abs(K.diagonal()).max())
              if self.stabilization > 0.0 else 0.0)
         if self._pattern is None or not self._pattern.fits(K):
-            K = sp.csr_matrix(K, copy=True)
-            K.sum_duplicates()
+            K = canonical_csr(K)
             self._pattern = AugmentedPattern(K, self.C, self.fixed, self._CtC)
-        active = active_rows(self.state)
-        upper = upper_rows(self.state, self.implicit_slip)
-        pad = self._redundant_active().astype(float)
-        A = self._pattern.matrix(K, active, upper, self.state, self.mu, self.implicit_slip,
-                                 stabilisation_factor=k, diagonal_pad=pad)
-        # A floating core comes from the pair states: the pivots are checked whenever the set
-        # of enforced rows differs from the last one that passed (the stiffness alone, with
+        A = self._pattern.matrix(K, active_rows(self.state),
+                                 upper_rows(self.state, self.implicit_slip), self.state, self.mu,
+                                 self.implicit_slip, stabilisation_factor=k,
+                                 diagonal_pad=self._redundant_active().astype(float))
+        # A floating core comes from the pair states: the pivots are checked whenever the
+        # states differ from those of the last matrix that passed (the stiffness alone, with
         # its floored secants, does not make the matrix singular; SuperLU still reports an
         # exactly singular one and every solve checks its residual).
-        signature = np.packbits(active | upper).tobytes()
-        factor = factorize(A, check_pivots=signature != self._checked_rows)
-        self._checked_rows = signature
+        states = self.state.state.tobytes()
+        factor = factorize(A, check_pivots=states != self._checked_states)
+        self._checked_states = states
         return factor
 
     def reference_rhs(self, reference: np.ndarray) -> np.ndarray:
