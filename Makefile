@@ -33,7 +33,7 @@ BLIND := cf6 cf7 cf14 tf3 tf5 tf6 tf7 vtt1 vtt2 vtt4
 validate: $(STAMP)  ## all specimen decks at full resolution (long): results/validation
 	$(BIN)/icewall sweep $(foreach d,$(ANALYSED) $(BLIND),decks/$(d).yaml) -o results/validation
 
-compare: $(STAMP)  ## coarse CI variants of the analysed decks against the stored baseline
+compare: $(STAMP)  ## CI variants of the analysed decks (to just past their peaks) against the stored baseline
 	$(BIN)/python -m icewall.analysis.compare -o results/compare
 
 $(VENV)/.plot: $(STAMP)

@@ -105,13 +105,33 @@ def read_baseline(path: str | os.PathLike) -> dict:
     return data
 
 
+def realization_bands(realizations: list[dict]) -> dict:
+    """What the round-off realizations of one run (the run itself among them) span: their
+    statuses, and the [min, max] band of the peak and of the residual load over those that
+    have a value (None if none has: a stopped run has no load at the residual deflection)."""
+    def band(key: str) -> list[float] | None:
+        values = [float(r[key]) for r in realizations if r.get(key) is not None]
+        return [_round(min(values)), _round(max(values))] if values else None
+
+    return {"realizations": len(realizations),
+            "statuses": sorted({str(r.get("status")) for r in realizations}),
+            "peak_band": band("peak_load"), "residual_band": band("residual_load")}
+
+
 def make_baseline(records: Mapping[str, dict], *, command: str, peak_tol: float = PEAK_TOL,
                   residual_tol: float = RESIDUAL_TOL,
-                  ratio_band: tuple[float, float] = RATIO_BAND) -> dict:
-    """The baseline data (header and runs) of measured records."""
+                  ratio_band: tuple[float, float] = RATIO_BAND,
+                  realizations: Mapping[str, list[dict]] | None = None) -> dict:
+    """The baseline data (header and runs) of measured records; `realizations` (run name ->
+    the records of its round-off realizations, the run's own included) adds the bands those
+    span to each run (:func:`realization_bands`)."""
     from icewall import __version__
 
     mean, n = mean_ratio(records)
+    runs = {name: {k: records[name].get(k) for k in _RECORD_KEYS} for name in sorted(records)}
+    for name, group in (realizations or {}).items():
+        if name in runs and group:
+            runs[name].update(realization_bands(group))
     return {
         "icewall_version": __version__,
         "date": datetime.now().astimezone().isoformat(timespec="seconds"),
@@ -120,8 +140,7 @@ def make_baseline(records: Mapping[str, dict], *, command: str, peak_tol: float 
         "tolerances": {"peak": peak_tol, "residual": residual_tol,
                        "ratio_band": [float(ratio_band[0]), float(ratio_band[1])]},
         "ratio": {"name": RATIO_NAME, "mean": _round(mean), "n": n},
-        "runs": {name: {k: records[name].get(k) for k in _RECORD_KEYS}
-                 for name in sorted(records)},
+        "runs": runs,
     }
 
 
@@ -133,7 +152,9 @@ def write_baseline(path: str | os.PathLike, data: dict) -> None:
         f"# Written by: {data.get('command')}",
         *textwrap.wrap(f"{NOTE}.", 94, initial_indent="# ", subsequent_indent="# "),
         "# residual_load: the load at residual_deflection, the run's final target deflection",
-        "# (loads.control.target); null where the run stopped before it.",
+        "# (loads.control.target); null where the run stopped before it. peak_band and",
+        "# residual_band: [min, max] over the run's round-off realizations (the same run with",
+        "# the load patches widened by k 1e-8 of their width); statuses: those they ended with.",
         "",
     ]
     text = "\n".join(head) + yaml.safe_dump(data, sort_keys=False, default_flow_style=None,

@@ -25,23 +25,28 @@ A *baseline* is a YAML file with a header and one entry per run (the result file
         residual_deflection: 16.0    # mm, the run's target deflection (loads.control.target)
         residual_load: null          # load at residual_deflection; null: the run stopped short
 
-The residual is the load at the run's own target deflection, not at 40 mm: the coarse CI
-variants stop at 16 mm. Every value is as :func:`icewall.analysis.extract.extract` defines it.
+The residual is the load at the run's own target deflection, not at 40 mm: the CI variants
+stop a little past their peaks. Every value is as :func:`icewall.analysis.extract.extract`
+defines it.
 
-:func:`compare` fails a run when its peak load moves by more than ``peak_tol`` (relative), when
-its residual load moves by more than ``residual_tol`` (looser: post-peak loads are
-path-sensitive -- where the softening localises, which crack opens first, a cut increment,
-can shift the descending branch by several per cent with no change to the model, while the
-peak is a stable figure), when its status changes (a run that completed now stops, or one that
-stopped now completes: either way the baseline no longer describes the code), when its
-overrides differ from the baseline's, or when it is missing. Over the runs whose specimen has a
-test value, the mean test/predicted ratio of the ultimate load must lie in ``ratio_band``.
-Runs absent from the baseline are reported ("new") but do not fail.
+**Round-off realizations.** Past the first softening the path of these walls is chaotic in
+round-off: the secant iteration stops at the first iterate within the tolerances (0.05, the
+thesis'), and which iterate that is, with it where the softening localises, changes with the
+last bits of the arithmetic -- another NumPy or BLAS build, another CPU. Measured on the CI
+variants with the load patches widened by 1e-8 of their width: peaks move by 0.05 % (CF-4) to
+5 % (TF-2), the load a few millimetres past the peak by up to 2x, and one of three CF-8
+realizations stopped. A baseline written with ``realizations: K`` therefore runs every variant
+K times (the run itself and K - 1 such perturbations) and stores the band [min, max] that each
+figure spans and the statuses the realizations ended with.
 
-:data:`COARSE_VARIANTS` are the CI's coarse variants of the eight analysed decks and
-:func:`run_ci_comparison` runs them (local process pool, resumable as `icewall sweep`) and
-compares them with ``tests/compare/baseline_coarse.yaml``. Regenerate that file, after a
-deliberate change of the results, with ``python -m icewall.analysis.compare --update``.
+:func:`compare` fails a run when its peak load lies outside its band widened by ``peak_tol``
+(relative; a band of one value where the baseline has none), when its residual load lies
+outside its band widened by ``residual_tol``, when it ends with a status none of the baseline's
+realizations ended with (a run that completed now stops, or the reverse: either way the
+baseline no longer describes the code), when its overrides differ from the baseline's, or when
+it is missing. Over the runs whose specimen has a test value, the mean test/predicted ratio of
+the ultimate load must lie in ``ratio_band``. Runs absent from the baseline are reported
+("new") but do not fail.
 """
 
 from __future__ import annotations
@@ -69,25 +74,24 @@ from icewall.analysis.baseline import (  # noqa: F401  (re-exported: the public 
 )
 from icewall.errors import IcewallError, ResultError
 
-# The CI band of the coarse variants (written to the header of a new coarse baseline). Today's
-# coarse mean is 0.74, outside the acceptance band: the TF walls are over-predicted two to three
-# times. The floor sits just under that, so that a change which makes the agreement with the
-# tests worse fails even after --update has reset the per-run values; the ceiling leaves room
-# for the fix. The acceptance band (RATIO_BAND) is for the full-resolution `make validate`.
-CI_RATIO_BAND = (0.70, 1.10)
-BASELINE_COARSE = Path(__file__).resolve().parents[2] / "tests" / "compare" / \
-    "baseline_coarse.yaml"
-# Coarse CI variants of the eight analysed decks: 2 mm instead of 1 mm increments, the run
-# ended at 16 mm instead of 40 mm, no field output (history only). With the code of 2026-11-23
-# (halving relaxation <= 1) each traces its peak within 16 mm (peaks at 4 to 15 mm). CF-4,
-# TF-1 and TF-2 stop at a snap-back that displacement control cannot follow (also with the
-# increment cut to 1/8 mm), VTT3 on non-convergence at 10 mm: that is what the code does
-# today, recorded as it is (a stopped run is a valid baseline state).
-_COARSE = ("loads.control.target=16", "loads.control.increment=2", "outputs.fields=[]")
-# (element sizes pinned: 75 mm for CF and TF, 50 mm for VTT's shallower core)
-COARSE_VARIANTS: dict[str, tuple[str, ...]] = {
-    name: _COARSE + (f"analysis.element_size={75 if name[0] in 'ct' else 50}",)
+# The CI band of the mean test/predicted ratio (written to the header of a new CI baseline).
+# The variants' mean is 0.87 today, outside the acceptance band: the TF walls and VTT3 are
+# over-predicted by 30-50 %. The floor sits under that, so that a change which makes the
+# agreement with the tests worse fails even after --update has reset the per-run values; the
+# ceiling leaves room for the fix. The acceptance band (RATIO_BAND) is for `make validate`.
+CI_RATIO_BAND = (0.80, 1.10)
+BASELINE_CI = Path(__file__).resolve().parents[2] / "tests" / "compare" / "baseline_ci.yaml"
+# CI variants of the eight analysed decks: the shipped deck (50 mm elements, 1 mm increments)
+# ended a little past its peak (the CF walls peak at 7-13 mm, TF at 3-5, VTT3 at 6) and with
+# no field output (history only): the figures CI checks are those of `make validate`, not of a
+# coarser model, at about the cost of the former coarse variants (2 mm steps on 75 mm
+# elements to 16 mm, where three CF walls had not yet peaked and TF peaks were 25 % higher).
+CI_VARIANTS: dict[str, tuple[str, ...]] = {
+    name: (f"loads.control.target={15 if name[0] == 'c' else 8 if name[0] == 't' else 10}",
+           "outputs.fields=[]")
     for name in ("cf4", "cf5", "cf8", "cf13", "tf1", "tf2", "tf4", "vtt3")}
+REALIZATIONS = 5  # round-off realizations per variant in a new baseline
+PERTURBATION = 1e-8  # relative widening of the load patches per realization
 
 
 @dataclass
@@ -128,16 +132,27 @@ def _relative(base, now) -> float | None:
     return (now - base) / abs(base)
 
 
-def _value_row(run: str, quantity: str, base, now, tol: float) -> Row:
-    change = _relative(base, now)
-    if base is None and now is None:
-        return Row(run, quantity, None, None, None, "ok", "no value (stopped short)")
-    if base is None or now is None:
-        return Row(run, quantity, base, now, None, "FAIL",
-                   "no value now" if now is None else "no baseline value")
-    verdict = "FAIL" if abs(change) > tol else "ok"
-    return Row(run, quantity, base, now, change, verdict,
-               f"moved more than {tol:.0%}" if verdict == "FAIL" else "")
+def _value_row(run: str, quantity: str, base, now, tol: float, band=None,
+               may_be_missing: bool = False) -> Row:
+    """Check `now` against the baseline value `base`, or against the band [lo, hi] that the
+    baseline's realizations span, widened by `tol` (relative). `may_be_missing`: a realization
+    of the baseline had no value either (it stopped short), so none now is no change."""
+    if band is None and base is not None:
+        band = [base, base]
+    if now is None:
+        if base is None or may_be_missing:
+            return Row(run, quantity, base, None, None, "ok", "no value (stopped short)")
+        return Row(run, quantity, base, None, None, "FAIL", "no value now")
+    if band is None:
+        return Row(run, quantity, None, now, None, "FAIL", "no baseline value")
+    lo, hi = float(min(band)), float(max(band))
+    below, above = _relative(lo, now), _relative(hi, now)
+    change = below if below < 0 else above if above > 0 else 0.0  # from the nearer band edge
+    where = f"band [{lo:.5g}, {hi:.5g}]" if hi > lo else ""
+    if abs(change) > tol:
+        return Row(run, quantity, base, now, change, "FAIL",
+                   f"moved more than {tol:.0%}" + (f" outside its {where}" if where else ""))
+    return Row(run, quantity, base, now, change, "ok", f"in {where}" if where else "")
 
 
 def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float = RESIDUAL_TOL,
@@ -166,7 +181,8 @@ def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float =
                                    " ".join(o for o in n_over if o not in b_over) or "-",
                                    None, "FAIL", "made with other overrides than the baseline"))
         bs, ns = b.get("status"), n.get("status")
-        if bs != ns:
+        statuses = set(b.get("statuses") or [bs])
+        if ns not in statuses:
             why = {("completed", "stopped"): f"now stops: {n.get('stop_reason', '')}",
                    ("stopped", "completed"): "now completes: update the baseline if intended"}
             report.rows.append(Row(name, "status", bs, ns, None, "FAIL",
@@ -174,7 +190,7 @@ def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float =
         else:
             report.rows.append(Row(name, "status", bs, ns, None, "ok"))
         report.rows.append(_value_row(name, "peak", b.get("peak_load"), n.get("peak_load"),
-                                      peak_tol))
+                                      peak_tol, b.get("peak_band")))
         report.rows.append(Row(name, "defl@peak", b.get("deflection_at_peak"),
                                n.get("deflection_at_peak"),
                                _relative(b.get("deflection_at_peak"),
@@ -182,8 +198,9 @@ def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float =
         at = n.get("residual_deflection") or b.get("residual_deflection")
         label = f"res@{at:g}mm" if isinstance(at, int | float) else "residual"
         report.rows.append(_value_row(name, label, b.get("residual_load"),
-                                      n.get("residual_load"), residual_tol))
-        if bs == "stopped" or ns == "stopped":
+                                      n.get("residual_load"), residual_tol,
+                                      b.get("residual_band"), "stopped" in statuses))
+        if "stopped" in statuses or ns == "stopped":
             report.rows.append(Row(name, "end defl", b.get("final_deflection"),
                                    n.get("final_deflection"),
                                    _relative(b.get("final_deflection"),
@@ -243,7 +260,8 @@ def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.Path
                     update: bool = False, peak_tol: float | None = None,
                     residual_tol: float | None = None,
                     band: tuple[float, float] | None = None, command: str | None = None,
-                    echo: Callable[[str], None] | None = None) -> int:
+                    echo: Callable[[str], None] | None = None,
+                    realizations: Mapping[str, list[dict]] | None = None) -> int:
     """Body of `icewall compare RESULTS_DIR --baseline FILE [--update] [--peak-tol F]
     [--residual-tol F] [--band LO HI]`; returns the exit status (0: pass, 1: a check failed).
 
@@ -281,34 +299,53 @@ def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.Path
 
             command = "icewall " + " ".join(shlex.quote(a) for a in sys.argv[1:])
         write_baseline(baseline_path, make_baseline(records, command=command, peak_tol=peak_tol,
-                                                    residual_tol=residual_tol, ratio_band=band))
+                                                    residual_tol=residual_tol, ratio_band=band,
+                                                    realizations=realizations))
         echo(f"baseline {baseline_path} written: {len(records)} run(s)")
         return 0
     return status
 
 
-def coarse_jobs(outdir: str | os.PathLike, variants: Mapping[str, Iterable[str]] | None = None,
-                decks_dir: str | os.PathLike = DECKS_DIR) -> list:
-    """Sweep jobs of the coarse CI variants (run name = deck stem)."""
-    from icewall.analysis.sweep import expand_jobs
+def realization_name(name: str, k: int) -> str:
+    """Result name of round-off realization `k` of a run (k = 0: the run itself)."""
+    return name if k == 0 else f"{name}.r{k}"
+
+
+def ci_jobs(outdir: str | os.PathLike, variants: Mapping[str, Iterable[str]] | None = None,
+            decks_dir: str | os.PathLike = DECKS_DIR, realizations: int = 1) -> list:
+    """Sweep jobs of the CI variants (run name = deck stem) and, for realizations > 1, of their
+    round-off realizations: realization k widens the load patches by k PERTURBATION of their
+    width (named `<stem>.r<k>`), which changes the loads only in their last bits."""
+    from icewall.analysis.sweep import Job, expand_jobs
+    from icewall.deck.load import load_deck
 
     jobs = []
-    for name, overrides in (variants or COARSE_VARIANTS).items():
-        jobs += expand_jobs([Path(decks_dir) / f"{name}.yaml"], list(overrides), None, outdir)
+    for name, overrides in (variants or CI_VARIANTS).items():
+        deck = Path(decks_dir) / f"{name}.yaml"
+        base = expand_jobs([deck], list(overrides), None, outdir)
+        jobs += base
+        if realizations > 1:
+            width = load_deck(deck, list(overrides)).deck.loads.patches.width
+        for k in range(1, realizations):
+            wider = f"loads.patches.width={width * (1.0 + k * PERTURBATION)!r}"
+            for job in base:
+                run = realization_name(job.name, k)
+                jobs.append(Job(run, job.deck, job.overrides + (wider,), job.varied + (wider,),
+                                str(Path(outdir) / f"{run}.h5")))
     return jobs
 
 
-def run_coarse(outdir: str | os.PathLike, workers: int | None = None,
-               variants: Mapping[str, Iterable[str]] | None = None,
-               echo: Callable[[str], None] = print) -> list[dict]:
-    """Run the coarse variants in a local process pool (finished runs are skipped, as in
-    `icewall sweep`); writes OUTDIR/<name>.h5 and OUTDIR/sweep_summary.csv. Returns the
-    per-run results (name, status, run_time_s, ...)."""
+def run_variants(outdir: str | os.PathLike, workers: int | None = None,
+                 variants: Mapping[str, Iterable[str]] | None = None, realizations: int = 1,
+                 echo: Callable[[str], None] = print) -> list[dict]:
+    """Run the CI variants (and their realizations) in a local process pool (finished runs
+    are skipped, as in `icewall sweep`); writes OUTDIR/<name>.h5 and OUTDIR/sweep_summary.csv.
+    Returns the per-run results (name, path, status, run_time_s, ...)."""
     from icewall.analysis.sweep import finished_status, run_local
     from icewall.analysis.sweep_table import build_rows, format_table, ratio_stats, write_csv
 
     os.makedirs(outdir, exist_ok=True)
-    jobs = coarse_jobs(outdir, variants)
+    jobs = ci_jobs(outdir, variants, realizations=realizations)
     results: dict[str, dict] = {}
     todo = []
     for job in jobs:
@@ -331,36 +368,48 @@ def run_coarse(outdir: str | os.PathLike, workers: int | None = None,
     stats = ratio_stats(rows)
     write_csv(os.path.join(outdir, "sweep_summary.csv"), rows, stats)
     echo(format_table(rows, stats))
-    echo(f"{len(todo)} coarse run(s) in {time.perf_counter() - start:.1f} s, "
+    echo(f"{len(todo)} run(s) in {time.perf_counter() - start:.1f} s, "
          f"{len(jobs) - len(todo)} skipped")
     return [results[j.name] for j in jobs]
 
 
-def run_ci_comparison(outdir: str | os.PathLike, baseline: str | os.PathLike = BASELINE_COARSE,
+def run_ci_comparison(outdir: str | os.PathLike, baseline: str | os.PathLike = BASELINE_CI,
                       workers: int | None = None, update: bool = False,
-                      echo: Callable[[str], None] = print, **tolerances) -> int:
-    """Run the coarse CI variants into `outdir` and compare them with `baseline` (or, with
-    `update`, rewrite it). Returns the exit status of :func:`compare_command`. Only the
-    variants' own result files are compared (the run names of COARSE_VARIANTS)."""
+                      echo: Callable[[str], None] = print,
+                      realizations: int = REALIZATIONS, **tolerances) -> int:
+    """Run the CI variants into `outdir` and compare them with `baseline`; with `update`,
+    also run `realizations` - 1 round-off realizations of each and rewrite the baseline with
+    the bands they span. Returns the exit status of :func:`compare_command`. Only the
+    variants' own result files are compared (the run names of CI_VARIANTS)."""
     if update and tolerances.get("band") is None and not Path(baseline).exists():
         tolerances["band"] = CI_RATIO_BAND
-    results = run_coarse(outdir, workers, echo=echo)
-    paths = [r["path"] for r in results if os.path.exists(r["path"])]
-    if not paths:
-        raise ResultError(f"no coarse run left a result in {outdir}")
-    return compare_command(paths, baseline, update=update, echo=echo,
-                           command="python -m icewall.analysis.compare --update", **tolerances)
+    results = run_variants(outdir, workers, realizations=realizations if update else 1,
+                           echo=echo)
+    paths = {r["name"]: r["path"] for r in results if os.path.exists(r["path"])}
+    own = [paths[name] for name in CI_VARIANTS if name in paths]
+    if not own:
+        raise ResultError(f"no CI run left a result in {outdir}")
+    groups, measured = None, own
+    if update:  # every realization measured once; the variants' own records are among them
+        records = measure_results(list(paths.values()))
+        groups = {name: [records[realization_name(name, k)] for k in range(realizations)
+                         if realization_name(name, k) in records] for name in CI_VARIANTS}
+        measured = {name: records[name] for name in CI_VARIANTS if name in records}
+    return compare_command(measured, baseline, update=update, echo=echo,
+                           command="python -m icewall.analysis.compare --update",
+                           realizations=groups, **tolerances)
 
 
 def main(argv: list[str] | None = None) -> int:
     """`python -m icewall.analysis.compare [--update] [-o OUTDIR] [--baseline FILE] [-j N]`:
-    run the coarse CI variants and compare them with (or rewrite) the stored baseline."""
+    run the CI variants and compare them with (or rewrite, running every round-off
+    realization) the stored baseline."""
     import argparse
 
     parser = argparse.ArgumentParser(prog="python -m icewall.analysis.compare",
                                      description=main.__doc__)
-    parser.add_argument("-o", "--out", default="results/ci_coarse")
-    parser.add_argument("--baseline", default=str(BASELINE_COARSE))
+    parser.add_argument("-o", "--out", default="results/compare")
+    parser.add_argument("--baseline", default=str(BASELINE_CI))
     parser.add_argument("-j", "--workers", type=int, default=None)
     parser.add_argument("--update", action="store_true")
     args = parser.parse_args(argv)

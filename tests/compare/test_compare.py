@@ -1,5 +1,5 @@
-"""icewall compare: unit tests on synthetic records, and the CI comparison of the coarse
-variants against the stored baseline (tests/compare/baseline_coarse.yaml)."""
+"""icewall compare: unit tests on synthetic records, and the CI comparison of the CI variants
+against the stored baseline (tests/compare/baseline_ci.yaml)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from icewall.analysis import compare as cmp
 from icewall.errors import ResultError
 
 HERE = Path(__file__).resolve().parent
-BASELINE = HERE / "baseline_coarse.yaml"
+BASELINE = HERE / "baseline_ci.yaml"
 WIDE = (0.0, 10.0)  # a band that never fails: tests of the per-run checks
 
 
@@ -135,20 +135,70 @@ def test_missing_baseline_is_an_error(tmp_path):
         cmp.compare_command(tmp_path / "nothing", tmp_path / "none.yaml", echo=print)
 
 
-def test_stored_baseline_matches_the_coarse_variants():
+def test_band_of_the_realizations_widened_by_the_tolerance():
+    # three realizations of one run: peaks 5.0-5.2, residuals 2.0-3.0
+    group = [record(peak=5.0, residual=2.0), record(peak=5.2, residual=3.0),
+             record(peak=5.1, residual=2.5)]
+    base = cmp.make_baseline({"cf4": group[0]}, command="test", ratio_band=WIDE,
+                             realizations={"cf4": group})
+    run = base["runs"]["cf4"]
+    assert run["peak_band"] == [5.0, 5.2] and run["residual_band"] == [2.0, 3.0]
+    assert run["realizations"] == 3 and run["statuses"] == ["completed"]
+    checks = {  # peak, residual -> verdicts (peak 3 %, residual 10 % beyond the band edges)
+        (5.2, 3.0): ("ok", "ok"), (5.3, 3.2): ("ok", "ok"), (4.86, 1.81): ("ok", "ok"),
+        (5.4, 2.5): ("FAIL", "ok"), (4.8, 2.5): ("FAIL", "ok"), (5.1, 3.4): ("ok", "FAIL"),
+        (5.1, 1.7): ("ok", "FAIL")}
+    for (peak, residual), expected in checks.items():
+        report = cmp.compare({"cf4": record(peak=peak, residual=residual)}, base,
+                             peak_tol=0.03, residual_tol=0.10, ratio_band=WIDE)
+        got = (verdicts(report, "peak")["cf4"], verdicts(report, "res@")["cf4"])
+        assert got == expected, (peak, residual, got)
+    row = next(r for r in cmp.compare({"cf4": record(peak=5.4)}, base, ratio_band=WIDE).rows
+               if r.quantity == "peak")
+    assert row.change == pytest.approx(5.4 / 5.2 - 1) and "band [5, 5.2]" in row.note
+
+
+def test_a_status_any_realization_ended_with_is_no_change():
+    # one realization of three stopped short (non-convergence): a stop is then no change,
+    # and neither is the residual it lacks; without that realization the stop fails
+    group = [record(), record(status="stopped"), record(residual=3.1)]
+    base = cmp.make_baseline({"cf8": group[0]}, command="test", ratio_band=WIDE,
+                             realizations={"cf8": group})
+    assert base["runs"]["cf8"]["statuses"] == ["completed", "stopped"]
+    assert base["runs"]["cf8"]["residual_band"] == [3.0, 3.1]  # over those with a value
+    assert cmp.compare({"cf8": record(status="stopped")}, base, ratio_band=WIDE).passed
+    alone = cmp.make_baseline({"cf8": group[0]}, command="test", ratio_band=WIDE)
+    assert not cmp.compare({"cf8": record(status="stopped")}, alone, ratio_band=WIDE).passed
+
+
+def test_realizations_perturb_only_the_patch_width(tmp_path):
+    jobs = {j.name: j for j in cmp.ci_jobs(tmp_path, {"cf4": ("loads.control.target=15",)},
+                                           realizations=3)}
+    assert sorted(jobs) == ["cf4", "cf4.r1", "cf4.r2"]
+    assert jobs["cf4"].overrides == ("loads.control.target=15",)
+    widths = [float(jobs[n].overrides[-1].split("=")[1]) for n in ("cf4.r1", "cf4.r2")]
+    assert widths == pytest.approx([50.0 * (1 + 1e-8), 50.0 * (1 + 2e-8)], rel=1e-15)
+    assert widths[0] != 50.0 and jobs["cf4.r2"].output == str(tmp_path / "cf4.r2.h5")
+
+
+def test_stored_baseline_matches_the_ci_variants():
     data = cmp.read_baseline(BASELINE)
-    assert set(data["runs"]) == set(cmp.COARSE_VARIANTS)
+    assert set(data["runs"]) == set(cmp.CI_VARIANTS)
     for name, run in data["runs"].items():
-        assert run["overrides"] == list(cmp.COARSE_VARIANTS[name])
+        assert run["overrides"] == list(cmp.CI_VARIANTS[name])
         assert run["deck"] == f"decks/{name}.yaml"
+        assert run["realizations"] == cmp.REALIZATIONS
+        assert run["status"] in run["statuses"]
+        if run["peak_load"] is not None:  # the run itself is one of the realizations
+            assert run["peak_band"][0] <= run["peak_load"] <= run["peak_band"][1]
     assert "not validation data" in data["note"]
 
 
-def test_ci_comparison_of_the_coarse_variants(tmp_path):
-    """Runs the eight coarse variants (about 2 minutes on 2 cores) and compares them with the
+def test_ci_comparison_of_the_ci_variants(tmp_path):
+    """Runs the eight CI variants (about 2 minutes on 2 cores) and compares them with the
     stored baseline: must pass on the current code."""
     lines: list[str] = []
     status = cmp.run_ci_comparison(tmp_path / "ci", BASELINE, workers=2, echo=lines.append)
     assert status == 0, "\n".join(lines)
     assert lines[-1].splitlines()[-1] == "PASS"
-    assert len(list((tmp_path / "ci").glob("*.h5"))) == len(cmp.COARSE_VARIANTS)
+    assert len(list((tmp_path / "ci").glob("*.h5"))) == len(cmp.CI_VARIANTS)
