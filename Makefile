@@ -30,8 +30,9 @@ stability: $(STAMP)  ## the stability suite: stiff and extreme cases, each run t
 ANALYSED := cf4 cf5 cf8 cf13 tf1 tf2 tf4 vtt3
 BLIND := cf6 cf7 cf14 tf3 tf5 tf6 tf7 vtt1 vtt2 vtt4
 
-validate: $(STAMP)  ## all specimen decks at full resolution (long): results/validation
-	$(BIN)/icewall sweep $(foreach d,$(ANALYSED) $(BLIND),decks/$(d).yaml) -o results/validation
+validate: $(STAMP)  ## all specimen decks at full resolution, 3 round-off realizations each (long)
+	$(BIN)/icewall sweep $(foreach d,$(ANALYSED) $(BLIND),decks/$(d).yaml) --realizations 3 \
+	    --set 'outputs.fields=[]' -o results/validation
 
 compare: $(STAMP)  ## CI variants of the analysed decks (to just past their peaks) against the stored baseline
 	$(BIN)/python -m icewall.analysis.compare -o results/compare

@@ -145,17 +145,21 @@ def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool,
 @click.option("--force", is_flag=True, help="Rerun finished runs too.")
 @click.option("--dry-run", is_flag=True, help="List the runs, run nothing.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
+@click.option("--realizations", type=click.IntRange(1), default=1, show_default=True,
+              help="Runs of each job: the job and K-1 round-off realizations (load patches "
+                   "widened by k 1e-8); OUT/sweep_realizations.csv gives the band of each "
+                   "figure over them.")
 @_handle_errors
 def sweep(decks: tuple[str, ...], sweep_file: str | None, overrides: tuple[str, ...],
           outdir: str, workers: int | None, scheduler: str | None, force: bool, dry_run: bool,
-          quiet: bool) -> None:
+          quiet: bool, realizations: int) -> None:
     """Run DECKS (and/or a sweep file) over parameter variations, in parallel and resumably;
     writes one HDF5 per run and OUT/sweep_summary.csv with test/predicted ratios."""
     from icewall.analysis.sweep import sweep_command
 
     sys.exit(sweep_command(decks, sweep_file=sweep_file, overrides=overrides, outdir=outdir,
                            workers=workers, scheduler=scheduler, force=force, quiet=quiet,
-                           dry_run=dry_run))
+                           dry_run=dry_run, realizations=realizations))
 
 
 @main.command()

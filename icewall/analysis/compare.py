@@ -91,7 +91,6 @@ CI_VARIANTS: dict[str, tuple[str, ...]] = {
            "outputs.fields=[]")
     for name in ("cf4", "cf5", "cf8", "cf13", "tf1", "tf2", "tf4", "vtt3")}
 REALIZATIONS = 5  # round-off realizations per variant in a new baseline
-PERTURBATION = 1e-8  # relative widening of the load patches per realization
 
 
 @dataclass
@@ -306,33 +305,16 @@ def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.Path
     return status
 
 
-def realization_name(name: str, k: int) -> str:
-    """Result name of round-off realization `k` of a run (k = 0: the run itself)."""
-    return name if k == 0 else f"{name}.r{k}"
-
-
 def ci_jobs(outdir: str | os.PathLike, variants: Mapping[str, Iterable[str]] | None = None,
             decks_dir: str | os.PathLike = DECKS_DIR, realizations: int = 1) -> list:
-    """Sweep jobs of the CI variants (run name = deck stem) and, for realizations > 1, of their
-    round-off realizations: realization k widens the load patches by k PERTURBATION of their
-    width (named `<stem>.r<k>`), which changes the loads only in their last bits."""
-    from icewall.analysis.sweep import Job, expand_jobs
-    from icewall.deck.load import load_deck
+    """Sweep jobs of the CI variants (run name = deck stem) with their round-off realizations
+    (icewall.analysis.sweep.with_realizations: `<stem>.r<k>`) when realizations > 1."""
+    from icewall.analysis.sweep import expand_jobs, with_realizations
 
     jobs = []
     for name, overrides in (variants or CI_VARIANTS).items():
-        deck = Path(decks_dir) / f"{name}.yaml"
-        base = expand_jobs([deck], list(overrides), None, outdir)
-        jobs += base
-        if realizations > 1:
-            width = load_deck(deck, list(overrides)).deck.loads.patches.width
-        for k in range(1, realizations):
-            wider = f"loads.patches.width={width * (1.0 + k * PERTURBATION)!r}"
-            for job in base:
-                run = realization_name(job.name, k)
-                jobs.append(Job(run, job.deck, job.overrides + (wider,), job.varied + (wider,),
-                                str(Path(outdir) / f"{run}.h5")))
-    return jobs
+        jobs += expand_jobs([Path(decks_dir) / f"{name}.yaml"], list(overrides), None, outdir)
+    return with_realizations(jobs, realizations)
 
 
 def run_variants(outdir: str | os.PathLike, workers: int | None = None,
@@ -391,6 +373,8 @@ def run_ci_comparison(outdir: str | os.PathLike, baseline: str | os.PathLike = B
         raise ResultError(f"no CI run left a result in {outdir}")
     groups, measured = None, own
     if update:  # every realization measured once; the variants' own records are among them
+        from icewall.analysis.sweep import realization_name
+
         records = measure_results(list(paths.values()))
         groups = {name: [records[realization_name(name, k)] for k in range(realizations)
                          if realization_name(name, k) in records] for name in CI_VARIANTS}

@@ -152,6 +152,42 @@ def expand_jobs(decks: Iterable[str | Path] = (), sets: Iterable[str] = (),
     return list(jobs.values())
 
 
+PERTURBATION = 1e-8
+"""Relative widening of the load patches per round-off realization (with_realizations)."""
+
+
+def realization_name(name: str, k: int) -> str:
+    """Run name of round-off realization `k` of run `name` (k = 0: the run itself)."""
+    return name if k == 0 else f"{name}.r{k}"
+
+
+def base_name(name: str) -> str:
+    """The run a realization's name belongs to (inverse of realization_name)."""
+    stem, dot, k = name.rpartition(".r")
+    return stem if dot and k.isdigit() else name
+
+
+def with_realizations(jobs: list[Job], realizations: int) -> list[Job]:
+    """Each job and its `realizations` - 1 round-off realizations: realization k widens the
+    load patches by k PERTURBATION of their width, which changes the loads in their last bits
+    only; where the path is chaotic in round-off (after the first softening) it follows another
+    branch, as on another machine or NumPy build. Named `<run>.r<k>`, beside the run."""
+    if realizations <= 1:
+        return list(jobs)
+    from icewall.deck.load import load_deck
+
+    out = []
+    for job in jobs:
+        out.append(job)
+        width = load_deck(job.deck, list(job.overrides)).deck.loads.patches.width
+        for k in range(1, realizations):
+            wider = f"loads.patches.width={width * (1.0 + k * PERTURBATION)!r}"
+            name = realization_name(job.name, k)
+            out.append(Job(name, job.deck, job.overrides + (wider,), job.varied + (wider,),
+                           str(Path(job.output).with_name(f"{name}.h5"))))
+    return out
+
+
 def finished_status(job: Job) -> str | None:
     """Status of an earlier run of `job` that can be skipped (completed/stopped), else None."""
     from icewall.results.reader import open_result
@@ -281,21 +317,31 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
                   overrides: Iterable[str] = (), outdir: str = "results/sweep",
                   workers: int | None = None, scheduler: str | None = None,
                   force: bool = False, quiet: bool = False, dry_run: bool = False,
-                  echo: Callable[[str], None] | None = None) -> int:
+                  echo: Callable[[str], None] | None = None, realizations: int = 1) -> int:
     """Body of `icewall sweep`; returns the exit status (0: every run completed, 1: not).
 
     CLI: `icewall sweep [DECK]... [-f/--file SWEEP.yaml] [--set key.path=v1,v2 ...]
     [-o/--out OUTDIR (results/sweep)] [-j/--workers N (os.cpu_count())] [--scheduler ADDRESS]
-    [--force] [--dry-run] [-q/--quiet]`. Deck errors raise DeckError (exit 2) before any run.
+    [--force] [--dry-run] [-q/--quiet] [--realizations K]`. Deck errors raise DeckError (exit 2)
+    before any run. With K > 1 every run has K - 1 round-off realizations beside it
+    (with_realizations) and OUTDIR/sweep_realizations.csv gives the band each figure spans.
     """
-    from icewall.analysis.sweep_table import build_rows, format_table, ratio_stats, write_csv
+    from icewall.analysis.sweep_table import (
+        band_rows,
+        build_rows,
+        format_bands,
+        format_table,
+        ratio_stats,
+        write_bands_csv,
+        write_csv,
+    )
 
     if echo is None:
         import click
 
         echo = click.echo
     say = (lambda text: None) if quiet else echo
-    jobs = expand_jobs(decks, overrides, sweep_file, outdir)
+    jobs = with_realizations(expand_jobs(decks, overrides, sweep_file, outdir), realizations)
     if dry_run:
         for job in jobs:
             echo(f"{job.name}  {job.deck}  {' '.join(job.overrides)}  -> {job.output}")
@@ -329,6 +375,11 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
     table = os.path.join(outdir, "sweep_summary.csv")
     write_csv(table, rows, stats)
     echo(format_table(rows, stats))
+    if realizations > 1:
+        bands = band_rows(rows, base_name)
+        band_stats = ratio_stats(bands)
+        write_bands_csv(os.path.join(outdir, "sweep_realizations.csv"), bands, band_stats)
+        echo(format_bands(bands, band_stats))
     say(f"{len(todo)} run(s) in {time.perf_counter() - start:.1f} s, "
         f"{len(jobs) - len(todo)} skipped; table: {table}")
     return 0 if all(r["status"] == "completed" for r in rows) else 1

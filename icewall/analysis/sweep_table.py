@@ -175,3 +175,68 @@ def format_table(rows: list[dict], stats) -> str:
     out += [f"{r['name']}: {r['status']}: {r['reason']}" for r in rows
             if r.get("status") != "completed" and r.get("reason")]
     return "\n".join(out)
+
+
+# -- round-off realizations (icewall sweep --realizations K) -----------------------------------
+BAND_COLUMNS = ("name", "specimen", "realizations", "statuses", "peak", "peak_min", "peak_max",
+                "residual_40", "residual_40_min", "residual_40_max", "unit", *RATIOS)
+
+
+def band_rows(rows: list[dict], base_name) -> list[dict]:
+    """One row per run over its round-off realizations (`base_name(name)` groups them): the
+    statuses they ended with, the median and the [min, max] of the peak and of the residual at
+    40 mm (over those with a value), and each test/predicted ratio as the median over them."""
+    groups: dict[str, list[dict]] = {}
+    for row in rows:
+        groups.setdefault(base_name(row["name"]), []).append(row)
+    out = []
+    for name, group in groups.items():
+        counts: dict[str, int] = {}
+        for r in group:
+            counts[str(r.get("status"))] = counts.get(str(r.get("status")), 0) + 1
+        band = {"name": name, "specimen": group[0].get("specimen"), "unit": group[0].get("unit"),
+                "realizations": len(group),
+                "statuses": ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))}
+        for key in ("peak", "residual_40", *RATIOS):
+            values = [float(r[key]) for r in group if r.get(key) is not None]
+            band[key] = float(np.median(values)) if values else None
+            if key in ("peak", "residual_40"):
+                band[f"{key}_min"] = min(values) if values else None
+                band[f"{key}_max"] = max(values) if values else None
+        out.append(band)
+    return out
+
+
+def write_bands_csv(path: str | os.PathLike, bands: list[dict], stats) -> None:
+    """The band rows, then `mean` and `cov` rows of the median ratios."""
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=BAND_COLUMNS)
+        writer.writeheader()
+        for row in bands + _stat_rows(stats):
+            writer.writerow({c: "" if row.get(c) is None else row.get(c) for c in BAND_COLUMNS})
+
+
+def format_bands(bands: list[dict], stats) -> str:
+    """Text table: per run the median [min-max] of the peak and of the residual at 40 mm over
+    its realizations, the statuses, and the median ratios with their mean and CoV."""
+    def span(row, key) -> str:
+        if row.get(key) is None:
+            return "-"
+        return (f"{row[key]:.4g} [{row[f'{key}_min']:.4g}-{row[f'{key}_max']:.4g}]")
+
+    head = ["run", "specimen", "statuses", "peak [band]", "res@40mm [band]", "unit",
+            *RATIOS]
+    body = [[b["name"], str(b.get("specimen") or "-"), b["statuses"], span(b, "peak"),
+             span(b, "residual_40"), str(b.get("unit") or "-"),
+             *(_text(b.get(c), c) for c in RATIOS)] for b in bands]
+    body += [[s["name"], "", "", "", "", "", *(_text(s.get(c), c) for c in RATIOS)]
+             for s in _stat_rows(stats)]
+    widths = [max(len(x) for x in col) for col in zip(head, *body, strict=True)]
+
+    def line(cells) -> str:
+        return "  ".join(x.ljust(w) for x, w in zip(cells, widths, strict=True)).rstrip()
+
+    title = (f"over {max(b['realizations'] for b in bands)} round-off realizations per run "
+             "(median [min-max]; ratios: median, then their mean and CoV)")
+    return "\n".join([title, line(head), line(["-" * w for w in widths]),
+                      *(line(c) for c in body)])

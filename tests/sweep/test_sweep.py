@@ -141,6 +141,28 @@ def test_sweep_table_and_ratios(tmp_path):
     assert rows["mean"]["res_test/pred"] == ""
 
 
+def test_realizations_and_their_bands(tmp_path):
+    code, lines = sweep([CF4, VTT3], tmp_path, realizations=3)
+    assert code == 0
+    rows = read_table(tmp_path)
+    assert set(rows) == {"cf4", "cf4.r1", "cf4.r2", "vtt3", "vtt3.r1", "vtt3.r2", "mean", "cov"}
+    # realization k widens the patches by k 1e-8: its overrides say so, its loads barely move
+    assert rows["cf4.r2"]["overrides"].endswith(f"loads.patches.width={50 * (1 + 2e-8)!r}")
+    peaks = [float(rows[n]["peak"]) for n in ("cf4", "cf4.r1", "cf4.r2")]
+    assert max(peaks) / min(peaks) - 1 < 1e-6 and len(set(peaks)) > 1
+    with open(tmp_path / "sweep_realizations.csv", newline="") as f:
+        bands = {row["name"]: row for row in csv.DictReader(f)}
+    assert set(bands) == {"cf4", "vtt3", "mean", "cov"}
+    cf4 = bands["cf4"]
+    assert cf4["realizations"] == "3" and cf4["statuses"] == "3 completed"
+    assert float(cf4["peak_min"]) == min(peaks) and float(cf4["peak_max"]) == max(peaks)
+    assert float(cf4["peak"]) == sorted(peaks)[1]  # the median
+    assert cf4["residual_40"] == ""  # a linear run to 2 mm never reaches 40 mm
+    ratios = [float(rows[n]["ult_test/pred"]) for n in ("cf4", "cf4.r1", "cf4.r2")]
+    assert float(cf4["ult_test/pred"]) == pytest.approx(sorted(ratios)[1])
+    assert any(line.startswith("over 3 round-off realizations") for line in lines)
+
+
 def test_resume_force_and_partial(tmp_path):
     code, _ = sweep([CF4], tmp_path, ["materials.concrete.fc=40,50"], workers=2)
     assert code == 0
