@@ -11,6 +11,7 @@ points with large increments pay for it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import fields
 from typing import Any
 
@@ -23,12 +24,14 @@ from icewall.materials.concrete_state import ConcreteState
 def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params: Any,
                                formulation: str, max_strain_step: float,
                                max_substeps: int = 32, trial_stress: str = "incremental",
-                               frozen: np.ndarray | None = None, with_moduli: bool = True
+                               frozen: np.ndarray | None = None, with_moduli: bool = True,
+                               update: Callable = update_concrete
                                ) -> tuple[np.ndarray, np.ndarray | None, ConcreteState]:
-    """`update_concrete` over sub-steps of at most `max_strain_step` per point (pure)."""
+    """`update` (`update_concrete` or its compiled form, same signature) over sub-steps of at
+    most `max_strain_step` per point (pure)."""
     if trial_stress != "incremental":  # total / co-rotational trials are not sub-stepped
-        return update_concrete(strain, state, params, formulation, trial_stress, frozen,
-                               with_moduli)
+        return update(strain, state, params, formulation, trial_stress=trial_stress,
+                      frozen=frozen, with_moduli=with_moduli)
     strain = np.asarray(strain, dtype=float).reshape(-1, 4)
     n = strain.shape[0]
     increment = strain - state.strain
@@ -39,10 +42,10 @@ def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params:
     # frozen (chatter-damped) points are sub-stepped too: the map must not change form in
     # the middle of an increment when the solver starts to freeze points
     if n_sub.max() == 1:
-        return update_concrete(strain, state, params, formulation, frozen=frozen,
-                               with_moduli=with_moduli)
-    stress, moduli, trial = update_concrete(strain, state, params, formulation, frozen=frozen,
-                                            with_moduli=with_moduli)
+        return update(strain, state, params, formulation, frozen=frozen,
+                      with_moduli=with_moduli)
+    stress, moduli, trial = update(strain, state, params, formulation, frozen=frozen,
+                                   with_moduli=with_moduli)
     many = np.flatnonzero(n_sub > 1)
     sub_frozen = None if frozen is None else np.asarray(frozen, dtype=bool)[many]
     current = state.take(many)
@@ -54,8 +57,8 @@ def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params:
         target = start + fraction * (strain[many] - start)
         if formulation == "plane_stress":
             target[:, 2] = current.strain[:, 2]
-        sig, D, new = update_concrete(target, current, sub_params, formulation,
-                                      frozen=sub_frozen, with_moduli=with_moduli)
+        sig, D, new = update(target, current, sub_params, formulation, frozen=sub_frozen,
+                             with_moduli=with_moduli)
         done = j > steps  # finished points keep their state
         current = new.select(~done, current) if done.any() else new
         if j == int(steps.max()):

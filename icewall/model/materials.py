@@ -30,6 +30,7 @@ class MaterialGroup:
     params: Any
     initial_state: Any  # None for elastic groups
     freezable: bool = False  # law accepts frozen=(n,) bool: those points may not load further
+    kernel: str = "numpy"  # concrete update: numpy, or numba (concrete_compiled)
 
 
 @dataclass(frozen=True)
@@ -119,6 +120,11 @@ def build_groups(deck: Deck, cell_material: np.ndarray, gauss_spacing: np.ndarra
 def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
                     gauss_spacing: np.ndarray, n_gauss_points: int) -> MaterialGroup:
     from icewall.materials.concrete import ConcreteState, concrete_tangent
+    from icewall.materials.concrete_compiled import (
+        choose_kernel,
+        compiled_floored_moduli,
+        compiled_substepped,
+    )
     from icewall.materials.substep import update_concrete_substepped
 
     c = deck.materials.concrete
@@ -133,6 +139,13 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
     coaxial = deck.analysis.concrete_stiffness == "secant-coaxial"
 
     own_moduli = not tangent and (floor > 0.0 or coaxial)  # built here from the trial state
+    # $ICEWALL_CONCRETE_KERNEL: the same update and moduli compiled (the tangent stays NumPy)
+    kernel = choose_kernel(formulation, trial_kind) if own_moduli else "numpy"
+
+    def compiled_law(strain, state, p, frozen=None):
+        stress, trial = compiled_substepped(strain, state, p, formulation, max_step,
+                                            trial_stress=trial_kind, frozen=frozen)
+        return stress, compiled_floored_moduli(trial, p, formulation, floor, coaxial), trial
 
     def law(strain, state, p, frozen=None):
         stress, moduli, trial = update_concrete_substepped(strain, state, p, formulation,
@@ -146,8 +159,10 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
             moduli = floored_moduli(trial, p, formulation, floor, coaxial)
         return stress, moduli, trial
 
-    return MaterialGroup("concrete", "rotating_crack", cells, law, point_params,
-                         ConcreteState.initial(h_points.size, params), freezable=True)
+    return MaterialGroup("concrete", "rotating_crack", cells,
+                         compiled_law if kernel == "numba" else law, point_params,
+                         ConcreteState.initial(h_points.size, params), freezable=True,
+                         kernel=kernel)
 
 
 def coaxial_shear_modulus(state: Any) -> np.ndarray:

@@ -130,13 +130,14 @@ def test_outputs_not_asked_for_are_neither_computed_nor_written(tmp_path, monkey
 
 @pytest.mark.parametrize("solver", ["nonlinear", "linear"])
 def test_run_imports_neither_matplotlib_nor_dask(tmp_path, solver):
-    """`icewall run` works with matplotlib and dask made unimportable, and loads neither
-    (while the plotting commands stay registered)."""
+    """`icewall run` works with matplotlib, dask and numba made unimportable, and loads none
+    of them (while the plotting commands stay registered; the concrete update falls back to
+    its NumPy kernel)."""
     script = f"""
 import sys
 class Block:
     def find_spec(self, name, path=None, target=None):
-        if name.split(".")[0] in ("matplotlib", "dask", "distributed"):
+        if name.split(".")[0] in ("matplotlib", "dask", "distributed", "numba"):
             raise ImportError("blocked: " + name)
 sys.meta_path.insert(0, Block())
 from icewall.cli import main
@@ -146,7 +147,7 @@ try:
           "--set", "analysis.solver={solver}"])
 except SystemExit as exc:
     assert not exc.code, exc.code
-print(sorted(m for m in sys.modules if m.split(".")[0] in ("matplotlib", "dask")))
+print(sorted(m for m in sys.modules if m.split(".")[0] in ("matplotlib", "dask", "numba")))
 assert "icewall.cli_post" in sys.modules  # the plotting commands are still registered
 """
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
