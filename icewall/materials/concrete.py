@@ -238,6 +238,20 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     return stress, moduli, trial_state
 
 
+def matrix_secant(state: ConcreteState) -> np.ndarray:
+    """Secant moduli (n, 3) for the iteration matrix: E_i, but never above |sigma_i| / |eps_iu|,
+    the secant of the stress the update returned. The two differ where the update caps the
+    stress below E_i eps_iu: a frozen point held at its envelope (its E_i stays the committed
+    one), and a direction far down a softening branch (uniaxial.SECANT_FLOOR). With E_i there
+    the matrix is stiffer than the points it stands for, and the iteration crawls: CF-8 at
+    11.5 mm kept a load norm of 0.08-0.12 for 200 iterations with 80 points held."""
+    local = np.abs(local_normal_components(state.stress, state.angle, 2.0))
+    eps_u = np.abs(state.equivalent_uniaxial_strain)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        actual = np.where(eps_u > 1e-12, local / eps_u, state.secant_modulus)
+    return np.minimum(state.secant_modulus, actual)
+
+
 def take_parameters(params: Any, index: np.ndarray, n_points: int) -> Any:
     """The parameters of the points `index`: per-point arrays (n,) are indexed, scalars kept."""
     if not is_dataclass(params):

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from icewall.materials import concrete, orthotropic, uniaxial
+from icewall.materials.concrete import matrix_secant
 from icewall.materials.concrete_state import ConcreteState
 from icewall.materials.substep import update_concrete_substepped
 
@@ -160,12 +161,14 @@ def compiled_substepped(strain: np.ndarray, state: ConcreteState, params: Any,
 
 
 def compiled_floored_moduli(state: ConcreteState, params: Any, formulation: str, floor: float,
-                            coaxial: bool = False) -> np.ndarray:
+                            coaxial: bool = False, returned_secant: bool = False) -> np.ndarray:
     """`model.materials.floored_moduli` (n, 4, 4) for plane strain and axisymmetric."""
     if formulation not in FORMULATIONS:
         raise ValueError(f"the compiled moduli do not cover {formulation}")
-    arrays = [_kernel_array(getattr(state, name), float) for name in (
-        "secant_modulus", "poisson_ratio", "shear_modulus", "stress", "strain", "angle")]
+    secant = matrix_secant(state) if returned_secant else state.secant_modulus
+    arrays = [_kernel_array(secant, float)]  # the E_i of floored_moduli
+    arrays += [_kernel_array(getattr(state, name), float) for name in (
+        "poisson_ratio", "shear_modulus", "stress", "strain", "angle")]
     return _kernels().floored_moduli_points(*arrays, float(params.E0), float(params.nu0),
                                             float(floor), bool(coaxial),
                                             float(orthotropic.PHI_MIN))

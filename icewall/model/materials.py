@@ -142,12 +142,13 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
     # $ICEWALL_CONCRETE_KERNEL: the same update and moduli compiled (the tangent stays NumPy)
     kernel = choose_kernel(formulation, trial_kind) if own_moduli else "numpy"
 
-    def compiled_law(strain, state, p, frozen=None):
+    def compiled_law(strain, state, p, frozen=None, returned_secant=False):
         stress, trial = compiled_substepped(strain, state, p, formulation, max_step,
                                             trial_stress=trial_kind, frozen=frozen)
-        return stress, compiled_floored_moduli(trial, p, formulation, floor, coaxial), trial
+        return stress, compiled_floored_moduli(trial, p, formulation, floor, coaxial,
+                                               returned_secant), trial
 
-    def law(strain, state, p, frozen=None):
+    def law(strain, state, p, frozen=None, returned_secant=False):
         stress, moduli, trial = update_concrete_substepped(strain, state, p, formulation,
                                                            max_step, trial_stress=trial_kind,
                                                            frozen=frozen,
@@ -156,7 +157,7 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
             moduli = concrete_tangent(strain, state, p, formulation, trial_stress=trial_kind,
                                       frozen=frozen)
         elif own_moduli:
-            moduli = floored_moduli(trial, p, formulation, floor, coaxial)
+            moduli = floored_moduli(trial, p, formulation, floor, coaxial, returned_secant)
         return stress, moduli, trial
 
     return MaterialGroup("concrete", "rotating_crack", cells,
@@ -178,13 +179,16 @@ def coaxial_shear_modulus(state: Any) -> np.ndarray:
 
 
 def floored_moduli(state: Any, params: Any, formulation: str, floor: float,
-                   coaxial: bool = False) -> np.ndarray:
+                   coaxial: bool = False, returned_secant: bool = False) -> np.ndarray:
     """Secant moduli of `state` with E_i and G12 held above `floor` times their initial values.
 
     Only the iteration matrix changes, never the stresses: a fully cracked point (E_i, and by
     eq. 3.21 G12, near zero) would otherwise leave the secant stiffness matrix nearly singular
-    and the iteration wandering through near-mechanisms.
+    and the iteration wandering through near-mechanisms. `returned_secant`: E_i no stiffer than
+    the secant of the stress the update returned (concrete.matrix_secant; a fallback of the
+    solver, solve.control._schemes).
     """
+    from icewall.materials.concrete import matrix_secant
     from icewall.materials.orthotropic import (
         condense_plane_stress,
         global_moduli,
@@ -192,8 +196,8 @@ def floored_moduli(state: Any, params: Any, formulation: str, floor: float,
     )
 
     E0, nu0 = float(params.E0), float(params.nu0)
-    normal = orthotropic_normal_stiffness(np.maximum(state.secant_modulus, floor * E0),
-                                          state.poisson_ratio)
+    secant = matrix_secant(state) if returned_secant else state.secant_modulus
+    normal = orthotropic_normal_stiffness(np.maximum(secant, floor * E0), state.poisson_ratio)
     if formulation == "plane_stress":
         normal = condense_plane_stress(normal)
     G0 = E0 / (2.0 * (1.0 + nu0))

@@ -59,7 +59,8 @@ class Structure:
         return any(g.model != "elastic" for g in self.groups)
 
     def evaluate(self, u: np.ndarray, states: tuple[Any, ...],
-                 frozen: tuple[np.ndarray | None, ...] | None = None) -> Evaluation:
+                 frozen: tuple[np.ndarray | None, ...] | None = None,
+                 returned_secant: bool = False) -> Evaluation:
         """Strains, stresses, moduli and internal forces at equation vector `u`.
 
         `frozen`, per group, marks points that may only unload/reload in this pass (the
@@ -72,6 +73,8 @@ class Structure:
         for group, state, mask in zip(self.groups, states, frozen, strict=True):
             n = group.cells.size * self.n_gauss
             extra = {"frozen": mask} if group.freezable and mask is not None else {}
+            if group.freezable and returned_secant:
+                extra["returned_secant"] = True
             sig, D, new = group.law(eps[group.cells].reshape(n, 4), state, group.params,
                                     **extra)
             stress[group.cells] = sig.reshape(-1, self.n_gauss, 4)

@@ -23,6 +23,9 @@ class SolverSettings:
     on_snap_back: str = "continue"  # stop | continue (accept the drop, recorded per step)
     max_relaxation: float = 1.0  # largest relaxation factor of the halving scheme
     max_jumps: int = 0  # failed smallest control steps retried as one step of 2 increments
+    # concrete E_i of the iteration matrix: committed (the trial state's secants) | returned
+    # (never stiffer than the stress the update returned: a fallback, control._schemes)
+    iteration_secant: str = "committed"
 
 
 def solver_settings(deck: Deck) -> SolverSettings:

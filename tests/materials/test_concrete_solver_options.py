@@ -121,6 +121,31 @@ def test_frozen_points_only_unload_and_reload():
     assert committed[0, 0] < inside[0, 0] == pytest.approx(linear[0, 0], rel=1e-12)
 
 
+def test_matrix_secant_is_the_secant_of_the_returned_stress():
+    """A point frozen at half its compressive peak strain and driven to 4 eps_c keeps its
+    committed E_1 (no damage grows), but its stress is capped at the envelope: the iteration
+    matrix takes sigma_1 / eps_1u, the secant of that stress, not E_1. A free point loading on
+    its envelope, and an unloading one, keep E_i exactly."""
+    from icewall.materials.concrete import matrix_secant
+
+    state = ConcreteState.initial(1, PARAMS)
+    half = np.array([[-0.5 * PARAMS.eps_c, 0.0, 0.0, 0.0]])
+    _, _, state = update_concrete(half, state, PARAMS, "plane_stress", "incremental")
+    far = np.array([[-4.0 * PARAMS.eps_c, 0.0, 0.0, 0.0]])
+    stress, _, held = update_concrete(far, state, PARAMS, "plane_stress", "incremental",
+                                      frozen=np.array([True]))
+    secant = matrix_secant(held)
+    assert secant[0, 0] == pytest.approx(-stress[0, 0] / -held.equivalent_uniaxial_strain[0, 0],
+                                         rel=1e-12)
+    assert secant[0, 0] < 0.5 * held.secant_modulus[0, 0]
+    assert secant[0, 2] == held.secant_modulus[0, 2]  # sigma_3 = 0 = eps_3u (plane stress)
+    _, _, loading = update_concrete(0.9 * half, state, PARAMS, "plane_stress", "incremental")
+    _, _, free = update_concrete(far, state, PARAMS, "plane_stress", "incremental")
+    for trial in (loading, free):
+        assert matrix_secant(trial)[0, 0] == pytest.approx(trial.secant_modulus[0, 0],
+                                                           rel=1e-12)
+
+
 def test_frozen_points_never_reload_above_their_envelope():
     """A point frozen at half its compressive peak strain and driven far past it in one step
     (as the solver's chatter damping does) keeps its secant and history but its stress is

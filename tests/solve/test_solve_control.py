@@ -88,19 +88,22 @@ def test_snap_back_accepted_as_snap_through_lands_on_the_softened_branch():
 
 def test_fallback_schemes_on_the_smallest_step():
     """A smallest step that does not converge is retried with the undamped halving
-    relaxation, then with Aitken's; tolerances and everything else stay the deck's."""
+    relaxation, then with Aitken's, then with the returned secant in the iteration matrix;
+    tolerances and everything else stay the deck's."""
     base = settings(1.0, 0.1)
     schemes = _schemes(base)
     assert len(schemes) == FALLBACKS + 1
-    assert [(s.acceleration, damp) for s, damp in schemes] == [
-        ("halving", True), ("halving", False), ("aitken", True)]
+    assert [(s.acceleration, damp, s.iteration_secant) for s, damp in schemes] == [
+        ("halving", True, "committed"), ("halving", False, "committed"),
+        ("aitken", True, "committed"), ("halving", True, "returned")]
     for scheme, _ in schemes:
         assert (scheme.tolerance_load, scheme.tolerance_displacement, scheme.max_iterations) == (
             base.tolerance_load, base.tolerance_displacement, base.max_iterations)
     # a fallback that would repeat the failed iteration exactly is not tried
     assert [(s.acceleration, damp) for s, damp in _schemes(replace(base, acceleration="none"))
-            ] == [("none", True), ("aitken", True)]
-    assert len(_schemes(replace(base, acceleration="aitken"))) == 1
+            ] == [("none", True), ("aitken", True), ("none", True)]
+    assert len(_schemes(replace(base, acceleration="aitken",
+                                iteration_secant="returned"))) == 1
 
 
 def _stall_between(monkeypatch, low: float, high: float) -> list[float]:
@@ -133,7 +136,7 @@ def test_a_stall_is_stepped_over_and_recorded(monkeypatch):
     for inc in incs:
         assert inc.load_factor == pytest.approx(analytic_softening_load(
             inc.control_displacement, length, length / n_el, E, weak * f, eps_f), rel=1e-5)
-    assert sum(0.006 < g < 0.0071 for g in attempted) == 2 + 1 + FALLBACKS  # 3 sizes + 2 schemes
+    assert sum(0.006 < g < 0.0071 for g in attempted) == 2 + 1 + FALLBACKS  # 3 sizes + schemes
 
 
 def test_a_stall_stops_the_run_when_no_jumps_are_allowed(monkeypatch):
