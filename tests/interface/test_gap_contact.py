@@ -214,3 +214,30 @@ def test_core_with_fixed_points_is_solvable(driver):
     assert np.all(gaps.lam_N[gaps.permanent] > 0)  # the fixed points carry tension
     assert np.all(gaps.lam_N[~gaps.permanent] <= 0)  # others free, or pressed as it tilts
     assert gaps.gap_N.min() > -1e-9 and count_states(gaps)["free"] >= len(m.pairs) - 3
+
+
+def test_refinement_only_where_the_first_solve_is_inaccurate(monkeypatch):
+    """AugmentedFactor.solve refines once when the first solve's backward error exceeds
+    REFINE_RTOL, and not otherwise; a factor of a slightly wrong matrix (an inaccurate first
+    solve) is refined to an accurate solution."""
+    import icewall.interface.augmented as aug
+
+    rng = np.random.default_rng(0)
+    A = sp.csc_matrix(sp.random(40, 40, density=0.2, random_state=1) + 10 * sp.eye(40))
+    b = rng.standard_normal((40, 2))
+    calls = []
+    factor = factorize(A)
+    real = factor.lu.solve
+    monkeypatch.setattr(factor.lu, "solve", lambda rhs: calls.append(1) or real(rhs))
+    x = factor.solve(b)
+    assert len(calls) == 1 and factor.lu.backward_error(b, x) <= aug.REFINE_RTOL
+    # the factors of A + 1e-9 |A| stand for an inaccurate LU of A: its first solve is off
+    near = factorize(sp.csc_matrix(A + 1e-9 * abs(A))).lu.solve
+    wrong = factorize(A)
+    calls.clear()
+    monkeypatch.setattr(wrong.lu, "solve", lambda rhs: calls.append(1) or near(rhs))
+    first = near(b)
+    assert wrong.lu.backward_error(b, first) > aug.REFINE_RTOL
+    refined = wrong.solve(b)
+    assert len(calls) == 2
+    assert wrong.lu.backward_error(b, refined) < 1e-3 * wrong.lu.backward_error(b, first)
