@@ -85,6 +85,11 @@ from icewall.errors import IcewallError, ResultError
 # agreement with the tests worse fails even after --update has reset the per-run values; the
 # ceiling leaves room for the fix. The acceptance band (RATIO_BAND) is for `make validate`.
 CI_RATIO_BAND = (0.80, 1.10)
+# The CI tolerance on the residual, beyond the band of the five realizations: a post-peak load
+# is one sample of a distribution that spans up to 2x (README, "Round-off"), and five samples
+# do not bound it (CF-4's load at 15 mm: band 2.04-3.05 MPa, a sixth realization 3.86). The
+# check then catches a post-peak branch that collapses or doubles, not a drift.
+CI_RESIDUAL_TOL = 0.50
 BASELINE_CI = Path(__file__).resolve().parents[2] / "tests" / "compare" / "baseline_ci.yaml"
 # CI variants of the eight analysed decks: the shipped deck (50 mm elements, 1 mm increments)
 # ended a little past its peak (the CF walls peak at 7-13 mm, TF at 3-5, VTT3 at 6) and with
@@ -368,8 +373,10 @@ def run_ci_comparison(outdir: str | os.PathLike, baseline: str | os.PathLike = B
     also run `realizations` - 1 round-off realizations of each and rewrite the baseline with
     the bands they span. Returns the exit status of :func:`compare_command`. Only the
     variants' own result files are compared (the run names of CI_VARIANTS)."""
-    if update and tolerances.get("band") is None and not Path(baseline).exists():
-        tolerances["band"] = CI_RATIO_BAND
+    if update and not Path(baseline).exists():  # a new baseline: the CI's own tolerances
+        for key, value in (("band", CI_RATIO_BAND), ("residual_tol", CI_RESIDUAL_TOL)):
+            if tolerances.get(key) is None:
+                tolerances[key] = value
     results = run_variants(outdir, workers, realizations=realizations if update else 1,
                            echo=echo)
     paths = {r["name"]: r["path"] for r in results if os.path.exists(r["path"])}
