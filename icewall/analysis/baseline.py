@@ -1,6 +1,36 @@
 """Baseline records of icewall results for `icewall compare`: what a run is measured by
 (peak, residual, status), the baseline file (read, make, write) and the mean test/predicted
-ratio. The file format is described in :mod:`icewall.analysis.compare`."""
+ratio.
+
+A *baseline* is a YAML file with a header and one entry per run (the result file's stem, as
+`icewall sweep` names it)::
+
+    # comment lines: what produced the file and what the numbers are
+    icewall_version: 0.1.0
+    date: 2026-11-23T06:10:00+00:00
+    command: python -m icewall.analysis.compare --update
+    note: icewall's own regression values, not validation data
+    tolerances: {peak: 0.03, residual: 0.10, ratio_band: [0.8, 1.1]}
+    ratio: {name: ult_test/pred, mean: 0.86, n: 8}
+    runs:
+      cf4:
+        specimen: CF-4
+        deck: decks/cf4.yaml
+        overrides: [loads.control.target=15, ...]
+        status: completed | stopped
+        stop_reason: ''
+        unit: MPa                    # the run's load measure: w in MPa (CF), total load in N
+        peak_load: 5.46              # largest load of the control stage (extract.py)
+        deflection_at_peak: 13.0     # mm
+        peaked: true                 # the load had dropped by the end of the run
+        final_deflection: 15.0       # mm, last converged step
+        residual_deflection: 15.0    # mm, the run's target deflection (loads.control.target)
+        residual_load: 2.04          # load at residual_deflection; null: the run stopped short
+        realizations: 5              # the run and its round-off realizations (optional, as
+        statuses: [completed]        #   are the three keys after it): how they ended,
+        peak_band: [5.44, 5.48]      #   the [min, max] of their peaks
+        residual_band: [2.04, 3.05]  #   and of their residual loads
+"""
 
 from __future__ import annotations
 

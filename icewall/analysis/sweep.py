@@ -327,12 +327,12 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
     (with_realizations) and OUTDIR/sweep_realizations.csv gives the band each figure spans.
     """
     from icewall.analysis.sweep_table import (
+        BAND_COLUMNS,
         band_rows,
         build_rows,
         format_bands,
         format_table,
         ratio_stats,
-        write_bands_csv,
         write_csv,
     )
 
@@ -378,7 +378,8 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
     if realizations > 1:
         bands = band_rows(rows, base_name)
         band_stats = ratio_stats(bands)
-        write_bands_csv(os.path.join(outdir, "sweep_realizations.csv"), bands, band_stats)
+        write_csv(os.path.join(outdir, "sweep_realizations.csv"), bands, band_stats,
+                  BAND_COLUMNS)
         echo(format_bands(bands, band_stats))
     say(f"{len(todo)} run(s) in {time.perf_counter() - start:.1f} s, "
         f"{len(jobs) - len(todo)} skipped; table: {table}")

@@ -146,13 +146,14 @@ def _stat_rows(stats) -> list[dict]:
     return [mean, cov]
 
 
-def write_csv(path: str | os.PathLike, rows: list[dict], stats) -> None:
+def write_csv(path: str | os.PathLike, rows: list[dict], stats,
+              columns: tuple[str, ...] = COLUMNS) -> None:
     """Rows, then a `mean` and a `cov` row (ratio columns only); empty cells for no value."""
     with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=COLUMNS)
+        writer = csv.DictWriter(f, fieldnames=columns)
         writer.writeheader()
         for row in rows + _stat_rows(stats):
-            writer.writerow({c: "" if row.get(c) is None else row.get(c) for c in COLUMNS})
+            writer.writerow({c: "" if row.get(c) is None else row.get(c) for c in columns})
 
 
 def format_table(rows: list[dict], stats) -> str:
@@ -205,15 +206,6 @@ def band_rows(rows: list[dict], base_name) -> list[dict]:
                 band[f"{key}_max"] = max(values) if values else None
         out.append(band)
     return out
-
-
-def write_bands_csv(path: str | os.PathLike, bands: list[dict], stats) -> None:
-    """The band rows, then `mean` and `cov` rows of the median ratios."""
-    with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=BAND_COLUMNS)
-        writer.writeheader()
-        for row in bands + _stat_rows(stats):
-            writer.writerow({c: "" if row.get(c) is None else row.get(c) for c in BAND_COLUMNS})
 
 
 def format_bands(bands: list[dict], stats) -> str:
