@@ -22,7 +22,7 @@ import scipy.sparse as sp
 from icewall.errors import ConvergenceError
 from icewall.interface.gap import FIXED, FREE, SLIP, GapState, relative_displacement, slip_force
 from icewall.interface.pattern import AugmentedPattern, canonical_csr, fixed_mask
-from icewall.solve.sparse import SingularMatrixError, SparseLU
+from icewall.solve.sparse import RESIDUAL_RTOL, SingularMatrixError, SparseLU
 from icewall.solve.sparse import factorize as sparse_factorize
 
 # |U_jj| below this fraction of the largest entry of column j marks a singular system
@@ -148,9 +148,11 @@ class AugmentedFactor:
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         b = np.asarray(rhs, dtype=float)
         x = self.lu.solve(b)
-        if not self.lu.backward_error(b, x) <= REFINE_RTOL:  # (NaN refines too)
+        error = self.lu.backward_error(b, x)
+        if not error <= REFINE_RTOL:  # (NaN refines too)
             x = x + self.lu.solve(b - self.A @ x)  # one step of iterative refinement
-        if not self.lu.accurate(b, x):  # sparse.RESIDUAL_RTOL on |A x - b|
+            error = self.lu.backward_error(b, x)
+        if not error <= RESIDUAL_RTOL:  # the check of SparseLU.accurate, on |A x - b|
             raise ConvergenceError("augmented interface system is singular: inaccurate or "
                                    f"non-finite solution; {SINGULAR_HINT}",
                                    reason="singular system")

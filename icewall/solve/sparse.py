@@ -107,10 +107,10 @@ class SparseLU(ABC):
     def backward_error(self, b: np.ndarray, x: np.ndarray) -> float:
         """max over columns of |A x - b| / (|A| |x| + |b|) (max norms; NaN if x is not
         finite)."""
-        residual = np.abs(b - self.A @ x).max(axis=0)
-        scale = self.norm_A * np.abs(x).max(axis=0) + np.abs(b).max(axis=0)
         if not np.all(np.isfinite(x)):
             return float("nan")
+        residual = np.abs(b - self.A @ x).max(axis=0)
+        scale = self.norm_A * np.abs(x).max(axis=0) + np.abs(b).max(axis=0)
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = np.where(scale > 0.0, residual / np.where(scale > 0.0, scale, 1.0),
                              np.where(residual > 0.0, np.inf, 0.0))
