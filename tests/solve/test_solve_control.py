@@ -10,7 +10,7 @@ from softening_bar import bar_problem, settings
 
 from icewall.errors import ConvergenceError
 from icewall.solve import control
-from icewall.solve.control import FALLBACKS, _schemes, follow_path
+from icewall.solve.control import FALLBACKS, LONG_ITERATIONS, _schemes, follow_path
 
 
 def analytic_softening_load(deflection, length, h, E, f_weak, failure_strain, area=10.0):
@@ -88,22 +88,25 @@ def test_snap_back_accepted_as_snap_through_lands_on_the_softened_branch():
 
 def test_fallback_schemes_on_the_smallest_step():
     """A smallest step that does not converge is retried with the undamped halving
-    relaxation, then with Aitken's, then with the returned secant in the iteration matrix;
-    tolerances and everything else stay the deck's."""
+    relaxation, then with Aitken's, then with the returned secant in the iteration matrix,
+    last undamped with LONG_ITERATIONS times the iteration limit; tolerances and everything
+    else stay the deck's."""
     base = settings(1.0, 0.1)
-    schemes = _schemes(base)
+    schemes, n = _schemes(base), base.max_iterations
     assert len(schemes) == FALLBACKS + 1
-    assert [(s.acceleration, damp, s.iteration_secant) for s, damp in schemes] == [
-        ("halving", True, "committed"), ("halving", False, "committed"),
-        ("aitken", True, "committed"), ("halving", True, "returned")]
+    assert [(s.acceleration, damp, s.iteration_secant, s.max_iterations)
+            for s, damp in schemes] == [
+        ("halving", True, "committed", n), ("halving", False, "committed", n),
+        ("aitken", True, "committed", n), ("halving", True, "returned", n),
+        ("halving", False, "committed", LONG_ITERATIONS * n)]
     for scheme, _ in schemes:
-        assert (scheme.tolerance_load, scheme.tolerance_displacement, scheme.max_iterations) == (
-            base.tolerance_load, base.tolerance_displacement, base.max_iterations)
+        assert (scheme.tolerance_load, scheme.tolerance_displacement) == (
+            base.tolerance_load, base.tolerance_displacement)
     # a fallback that would repeat the failed iteration exactly is not tried
     assert [(s.acceleration, damp) for s, damp in _schemes(replace(base, acceleration="none"))
-            ] == [("none", True), ("aitken", True), ("none", True)]
-    assert len(_schemes(replace(base, acceleration="aitken",
-                                iteration_secant="returned"))) == 1
+            ] == [("none", True), ("aitken", True), ("none", True), ("none", False)]
+    only_long = _schemes(replace(base, acceleration="aitken", iteration_secant="returned"))
+    assert [s.max_iterations for s, _ in only_long] == [n, LONG_ITERATIONS * n]
 
 
 def _stall_between(monkeypatch, low: float, high: float) -> list[float]:
