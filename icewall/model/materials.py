@@ -30,6 +30,9 @@ class MaterialGroup:
     params: Any
     initial_state: Any  # None for elastic groups
     freezable: bool = False  # law accepts frozen=(n,) bool: those points may not load further
+    # law accepts tangent=True and then returns the consistent tangent as moduli (the other
+    # laws' moduli already are their tangents: steel's elastoplastic one, elastic D)
+    tangent_switch: bool = False
     kernel: str = "numpy"  # concrete update: numpy, or numba (concrete_compiled)
 
 
@@ -125,6 +128,7 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
         compiled_floored_moduli,
         compiled_substepped,
     )
+    from icewall.materials.concrete_tangent import update_with_tangent
     from icewall.materials.substep import update_concrete_substepped
 
     c = deck.materials.concrete
@@ -142,13 +146,32 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
     # $ICEWALL_CONCRETE_KERNEL: the same update and moduli compiled (the tangent stays NumPy)
     kernel = choose_kernel(formulation, trial_kind) if own_moduli else "numpy"
 
-    def compiled_law(strain, state, p, frozen=None, returned_secant=False):
+    def compiled_update(strain, state, p, formulation, trial_stress, with_moduli=False):
+        stress, trial = compiled_substepped(strain, state, p, formulation, max_step,
+                                            trial_stress=trial_stress)
+        return stress, None, trial
+
+    def numpy_update(strain, state, p, formulation, trial_stress, with_moduli=False):
+        return update_concrete_substepped(strain, state, p, formulation, max_step,
+                                          trial_stress=trial_stress, with_moduli=with_moduli)
+
+    def consistent(strain, state, p, frozen, update):
+        """The same update, with its consistent tangent as moduli (concrete_tangent)."""
+        if frozen is not None:
+            raise ValueError("the consistent concrete tangent is not defined for frozen points")
+        return update_with_tangent(strain, state, p, formulation, trial_kind, update)
+
+    def compiled_law(strain, state, p, frozen=None, returned_secant=False, tangent=False):
+        if tangent:
+            return consistent(strain, state, p, frozen, compiled_update)
         stress, trial = compiled_substepped(strain, state, p, formulation, max_step,
                                             trial_stress=trial_kind, frozen=frozen)
         return stress, compiled_floored_moduli(trial, p, formulation, floor, coaxial,
                                                returned_secant), trial
 
-    def law(strain, state, p, frozen=None, returned_secant=False):
+    def law(strain, state, p, frozen=None, returned_secant=False, tangent=False):
+        if tangent:
+            return consistent(strain, state, p, frozen, numpy_update)
         stress, moduli, trial = update_concrete_substepped(strain, state, p, formulation,
                                                            max_step, trial_stress=trial_kind,
                                                            frozen=frozen,
@@ -163,7 +186,7 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
     return MaterialGroup("concrete", "rotating_crack", cells,
                          compiled_law if kernel == "numba" else law, point_params,
                          ConcreteState.initial(h_points.size, params), freezable=True,
-                         kernel=kernel)
+                         kernel=kernel, tangent_switch=True)
 
 
 def coaxial_shear_modulus(state: Any) -> np.ndarray:

@@ -60,11 +60,14 @@ class Structure:
 
     def evaluate(self, u: np.ndarray, states: tuple[Any, ...],
                  frozen: tuple[np.ndarray | None, ...] | None = None,
-                 returned_secant: bool = False) -> Evaluation:
+                 returned_secant: bool = False, tangent: bool = False) -> Evaluation:
         """Strains, stresses, moduli and internal forces at equation vector `u`.
 
         `frozen`, per group, marks points that may only unload/reload in this pass (the
-        solver's chatter damping; used by groups whose law is freezable)."""
+        solver's chatter damping; used by groups whose law is freezable). `tangent`: every
+        law's moduli are its consistent tangent d sigma / d eps (concrete's rotating-crack
+        tangent instead of its iteration matrix), so `stiffness` assembles the tangent
+        stiffness d f_int / d u."""
         eps = strain(self.kinematics, u)
         stress = np.empty_like(eps)
         moduli = np.empty(eps.shape + (4,))
@@ -75,6 +78,8 @@ class Structure:
             extra = {"frozen": mask} if group.freezable and mask is not None else {}
             if group.freezable and returned_secant:
                 extra["returned_secant"] = True
+            if group.tangent_switch and tangent:
+                extra["tangent"] = True
             sig, D, new = group.law(eps[group.cells].reshape(n, 4), state, group.params,
                                     **extra)
             stress[group.cells] = sig.reshape(-1, self.n_gauss, 4)

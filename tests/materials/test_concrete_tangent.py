@@ -1,0 +1,207 @@
+"""Consistent tangent of the rotating-crack concrete update (concrete_tangent, issue 19).
+
+Every check is against central differences of `update_concrete` itself in GLOBAL components,
+at single points on each branch of Fig. 3.12; each case first asserts that the point really is
+on that branch.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+import numpy as np
+import pytest
+
+from icewall.materials.concrete import update_concrete
+from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.concrete_tangent import consistent_tangent, update_with_tangent
+from icewall.materials.orthotropic import local_normal_components
+from icewall.materials.parameters import derive_concrete_parameters
+from icewall.materials.substep import update_concrete_substepped
+
+PARAMS = derive_concrete_parameters(53.5, 50.0)
+ET = PARAMS.ft / PARAMS.E0  # cracking strain
+EC = PARAMS.eps_c
+FORMULATIONS = ("plane_strain", "plane_stress", "axisymmetric")
+TRIALS = ("corotational", "incremental")
+
+# committed strain path (each row committed in turn), then the strain the tangent is taken at
+CASES: dict[str, list[list[float]]] = {
+    "uncracked elastic": [[0.3 * ET, -0.2 * ET, 0.0, 0.1 * ET]],
+    "tension before peak": [[0.3 * ET, 0.0, 0.0, 0.0], [0.6 * ET, 0.05 * ET, 0.0, 0.03 * ET]],
+    "tension after peak": [[0.6 * ET, 0.0, 0.0, 0.0], [1.6 * ET, 0.1 * ET, 0.0, 0.1 * ET]],
+    "softening": [[ET, 0.0, 0.0, 0.0], [3 * ET, 0.0, 0.0, 0.0], [4 * ET, 0.2 * ET, 0.0, 0.3 * ET]],
+    "unloading cracked": [[ET, 0.0, 0.0, 0.0], [5 * ET, 0.0, 0.0, 0.0],
+                          [3 * ET, 0.1 * ET, 0.0, 0.2 * ET]],
+    "reloading cracked": [[ET, 0.0, 0.0, 0.0], [5 * ET, 0.0, 0.0, 0.0], [2 * ET, 0.0, 0.0, 0.0],
+                          [6 * ET, 0.1 * ET, 0.0, 0.2 * ET]],
+    "compression loading": [[-0.15 * EC, 0.0, 0.0, 0.0], [-0.6 * EC, 0.08 * EC, 0.0, 0.04 * EC]],
+    "crushing": [[-0.5 * EC, 0.15 * EC, 0.0, 0.0], [-1.3 * EC, 0.4 * EC, 0.0, 0.0],
+                 [-1.6 * EC, 0.5 * EC, 0.0, 0.1 * EC]],
+    "biaxial compression": [[-0.2 * EC, -0.16 * EC, 0.0, 0.0],
+                            [-0.6 * EC, -0.48 * EC, 0.0, 0.04 * EC]],
+    "rotating axes, cracked": [[5 * ET, -ET, 0.0, 0.0], [4 * ET, -ET, 0.0, 4 * ET]],
+    "equal principal strains": [[-0.2 * EC, -0.2 * EC, 0.0, 0.0], [-0.4 * EC, -0.4 * EC, 0.0, 0.0]],
+    "nearly equal principal strains": [[-0.2 * EC, -0.2 * EC, 0.0, 0.0],
+                                       [-0.4 * EC, -0.4 * EC * (1.0 - 1e-7), 0.0, 0.0]],
+}
+
+
+def _case(name: str, formulation: str, trial_stress: str
+          ) -> tuple[np.ndarray, ConcreteState, ConcreteState]:
+    """(strain (1, 4), committed state, trial state at strain) of a CASES path."""
+    rows = [list(row) for row in CASES[name]]
+    if formulation == "axisymmetric":  # a hoop strain as well
+        for row in rows:
+            row[2] = 0.2 * row[1]
+    state = ConcreteState.initial(1, PARAMS)
+    for row in rows[:-1]:
+        _, _, state = update_concrete(np.array([row]), state, PARAMS, formulation, trial_stress)
+    strain = np.array([rows[-1]])
+    _, _, trial = update_concrete(strain, state, PARAMS, formulation, trial_stress)
+    return strain, state, trial
+
+
+def _differences(update, strain: np.ndarray, state: ConcreteState, formulation: str,
+                 direction: np.ndarray, h: float) -> np.ndarray:
+    plus = update(strain + h * direction, state, PARAMS, formulation)[0]
+    minus = update(strain - h * direction, state, PARAMS, formulation)[0]
+    return (plus - minus)[0] / (2.0 * h)
+
+
+def _directions(formulation: str, size: float, count: int = 5) -> np.ndarray:
+    """Random strain directions (count, 4) of magnitude ~size (zz only where it is an input)."""
+    directions = np.random.default_rng(7).normal(size=(count, 4)) * size
+    if formulation != "axisymmetric":
+        directions[:, 2] = 0.0
+    return directions
+
+
+def _branch_holds(name: str, state: ConcreteState, trial: ConcreteState, strain: np.ndarray,
+                  formulation: str) -> None:
+    """The case is on the branch its name says (so that the comparison means something)."""
+    loads = trial.max_equivalent_uniaxial_strain[0] > state.max_equivalent_uniaxial_strain[0]
+    principal = local_normal_components(trial.strain, trial.angle, 1.0)[0]
+    checks = {
+        "uncracked elastic": not trial.cracked.any() and np.all(
+            trial.secant_modulus == PARAMS.E0),
+        "tension before peak": not trial.cracked.any() and loads[0],
+        "tension after peak": trial.cracked[0, 0] and not state.cracked[0, 0] and loads[0],
+        "softening": state.cracked[0, 0] and loads[0],
+        "unloading cracked": (state.cracked[0, 0] and not loads[0]
+                              and trial.equivalent_uniaxial_strain[0, 0] > 0),
+        "reloading cracked": (state.max_equivalent_uniaxial_strain[0, 0]
+                              > state.equivalent_uniaxial_strain[0, 0] > 0 and loads[0]
+                              and trial.secant_modulus[0, 0] < state.secant_modulus[0, 0]),
+        "compression loading": (not trial.crushed.any() and loads[0]
+                                and trial.secant_modulus[0, 0] < PARAMS.E0),
+        "crushing": state.crushed[0, 0] and loads[0],
+        "biaxial compression": (loads[:2].all()
+                                and np.all(trial.uniaxial_strength[0, :2] < -1.05 * PARAMS.fc)),
+        "rotating axes, cracked": state.cracked.any() and abs(trial.angle[0]
+                                                              - state.angle[0]) > 0.3,
+        "equal principal strains": principal[0] == principal[1],
+        "nearly equal principal strains": 0 < abs(principal[0] - principal[1])
+        < 1e-6 * abs(principal[0]),
+    }
+    assert checks[name], f"{name} ({formulation}) is not on its branch"
+
+
+@pytest.mark.parametrize("trial_stress", TRIALS)
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+@pytest.mark.parametrize("name", list(CASES))
+def test_tangent_matches_central_differences_on_every_branch(name, formulation, trial_stress):
+    strain, state, trial = _case(name, formulation, trial_stress)
+    _branch_holds(name, state, trial, strain, formulation)
+    tangent = consistent_tangent(strain, state, PARAMS, formulation, trial_stress)[0]
+    update = partial(update_concrete, trial_stress=trial_stress, with_moduli=False)
+    for direction in _directions(formulation, float(np.abs(strain).max())):
+        expected = _differences(update, strain, state, formulation, direction, 1e-7)
+        scale = np.abs(expected).max()
+        assert np.abs(tangent @ direction - expected).max() <= 1e-6 * scale, (
+            name, formulation, trial_stress, tangent @ direction, expected)
+
+
+def test_returns_the_stress_and_trial_state_of_the_update():
+    strain, state, _ = _case("rotating axes, cracked", "plane_strain", "corotational")
+    stress, _, trial = update_concrete(strain, state, PARAMS, "plane_strain", "corotational")
+    same_stress, _, same_trial = update_with_tangent(strain, state, PARAMS, "plane_strain")
+    np.testing.assert_array_equal(same_stress, stress)
+    np.testing.assert_array_equal(same_trial.secant_modulus, trial.secant_modulus)
+
+
+def test_formulation_zeros():
+    """plane strain: eps_zz no input (zz column 0); plane stress: sigma_zz condensed (zz row and
+    column 0); axisymmetric: the hoop column is live."""
+    tangents = {}
+    for formulation in FORMULATIONS:
+        strain, state, _ = _case("softening", formulation, "corotational")
+        tangents[formulation] = consistent_tangent(strain, state, PARAMS, formulation)[0]
+    assert np.all(tangents["plane_strain"][:, 2] == 0.0)
+    assert np.abs(tangents["plane_strain"][2]).max() > 0.0  # sigma_zz reacts
+    assert np.all(tangents["plane_stress"][2] == 0.0)
+    assert np.all(tangents["plane_stress"][:, 2] == 0.0)
+    assert np.abs(tangents["axisymmetric"][:, 2]).max() > 0.0
+
+
+@pytest.mark.parametrize("name", ["compression loading", "biaxial compression"])
+def test_tangent_is_not_symmetrised(name):
+    """The rotating-crack tangent is unsymmetric in general: on a nonlinear compressive branch
+    d s_i / d e_j = (d s_i / d trial_i) C_ij differs from d s_j / d e_i (Poisson coupling), and
+    the strength surface couples the directions on the ray of the trial stress."""
+    strain, state, _ = _case(name, "plane_strain", "corotational")
+    tangent = consistent_tangent(strain, state, PARAMS, "plane_strain")[0]
+    in_plane = tangent[np.ix_([0, 1, 3], [0, 1, 3])]
+    assert np.abs(in_plane - in_plane.T).max() > 1e-3 * np.abs(in_plane).max()
+
+
+def test_softening_tangent_is_indefinite():
+    strain, state, _ = _case("softening", "plane_strain", "corotational")
+    tangent = consistent_tangent(strain, state, PARAMS, "plane_strain")[0]
+    in_plane = tangent[np.ix_([0, 1, 3], [0, 1, 3])]
+    assert np.linalg.eigvalsh(0.5 * (in_plane + in_plane.T)).min() < 0.0
+
+
+def test_equal_principal_strains_take_the_isotropic_shear_limit():
+    """At a virgin point e_1 = e_2 = 0: the tangent is Hooke's (G = E / (2 (1 + nu))), not 0/0."""
+    state = ConcreteState.initial(1, PARAMS)
+    tangent = consistent_tangent(np.zeros((1, 4)), state, PARAMS, "plane_strain")[0]
+    assert np.all(np.isfinite(tangent))
+    assert tangent[3, 3] == pytest.approx(PARAMS.E0 / (2.0 * (1.0 + PARAMS.nu0)), rel=1e-8)
+    _, secant, _ = update_concrete(np.zeros((1, 4)), state, PARAMS, "plane_strain")
+    live = [0, 1, 3]  # the secant matrix also has a zz column; eps_zz = 0 is imposed here
+    np.testing.assert_allclose(tangent[:, live], secant[0][:, live], rtol=1e-7,
+                               atol=1e-7 * PARAMS.E0)
+
+
+def test_batched_points_equal_single_points():
+    """One batched call over many points gives each point's own tangent (per-point k_t, k_c)."""
+    strains, states = [], []
+    for name in CASES:
+        strain, state, _ = _case(name, "plane_strain", "corotational")
+        strains.append(strain)
+        states.append(state)
+    strain = np.concatenate(strains)
+    state = ConcreteState(**{f: np.concatenate([getattr(s, f) for s in states])
+                             for f in ConcreteState.__dataclass_fields__})
+    batched = consistent_tangent(strain, state, PARAMS, "plane_strain")
+    for k, (one, committed) in enumerate(zip(strains, states, strict=True)):
+        np.testing.assert_allclose(batched[k], consistent_tangent(one, committed, PARAMS,
+                                                                  "plane_strain")[0],
+                                   rtol=1e-12, atol=1e-9)
+
+
+def test_tangent_of_the_substepped_incremental_update():
+    """With `update` the sub-stepped update the solver calls (incremental trial, a large
+    increment split into many sub-steps), the tangent is that map's derivative."""
+    strain, state, _ = _case("rotating axes, cracked", "plane_strain", "incremental")
+    # 13.3 sub-steps (the update jumps where the count does, at whole numbers)
+    update = partial(update_concrete_substepped, max_strain_step=0.3 * ET)
+    tangent = consistent_tangent(strain, state, PARAMS, "plane_strain", "incremental",
+                                 update=update)[0]
+    single = consistent_tangent(strain, state, PARAMS, "plane_strain", "incremental")[0]
+    assert np.abs(tangent - single).max() > 1e-3 * np.abs(single).max()  # sub-steps matter
+    call = partial(update, trial_stress="incremental", with_moduli=False)
+    for direction in _directions("plane_strain", float(np.abs(strain).max()), 3):
+        expected = _differences(call, strain, state, "plane_strain", direction, 1e-7)
+        assert np.abs(tangent @ direction - expected).max() <= 1e-6 * np.abs(expected).max()
