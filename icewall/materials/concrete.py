@@ -84,6 +84,37 @@ def _envelope(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.ndarray,
     return np.where(tensile, t_stress, c_stress), np.where(tensile, t_secant, c_secant)
 
 
+def loading_directions(trial: np.ndarray, eps_u: np.ndarray, state: ConcreteState, params: Any
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """(loading, sign_change) (n, 3) bool of Fig. 3.12 step 6 for the trial stress and its
+    eps_iu: loading where |eps_iu| passes its maximum (Fig. 3.13); sign_change where eps_iu
+    has left the sign of the committed uniaxial strength."""
+    magnitude = np.abs(eps_u)
+    secant_line = state.secant_modulus * magnitude
+    # a direction that changes sign never unloads along a secant above its new envelope
+    # (checked against the uniaxial envelope, so that a zero increment stays an unloading)
+    sign_change = (eps_u > 0.0) != (state.uniaxial_strength > 0.0)
+    # round-off of the rotation is relative to the point's largest stress, not to sigma_i
+    slack = LOADING_TOLERANCE * (state.max_equivalent_uniaxial_strain + np.abs(
+        trial).max(axis=1, keepdims=True) / state.secant_modulus)
+    loading = magnitude > state.max_equivalent_uniaxial_strain + slack
+    rows = np.nonzero(sign_change.any(axis=1))[0]
+    if rows.size:
+        uniaxial_strength = np.where(eps_u[rows] > 0.0, params.ft, -params.fc)
+        uniaxial_stress, _ = _envelope(eps_u[rows], uniaxial_strength, np.where(
+            eps_u[rows] > 0.0, params.eps_t, -params.eps_c), params, rows)
+        crossing = secant_line[rows] > uniaxial_stress * (1 + 1e-9)
+        # a direction past its peak on the other sign's branch (cracked, now closing in
+        # compression, or crushed, now in tension) loads only where its secant line meets the
+        # new envelope: its max |eps_iu| belongs to the other branch, and loading onto this
+        # branch at that magnitude makes the stress jump (a closing crack leapt from its crack
+        # secant to the compression envelope: VTT1 cycled between the two at 38.6 mm)
+        damaged = state.cracked[rows] | state.crushed[rows]
+        loading[rows] = (loading[rows] & ~(damaged & sign_change[rows])
+                         | sign_change[rows] & crossing)
+    return loading, sign_change
+
+
 def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
                     trial_stress: str = "incremental", frozen: np.ndarray | None = None,
                     with_moduli: bool = True
@@ -144,28 +175,7 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     # Step 6 (first): loading vs unloading by max |eps_iu| per direction (errata §3,
     # Fig. 3.13); it does not depend on the strength surface.
     magnitude = np.abs(eps_u)
-    secant_line = state.secant_modulus * magnitude
-    # a direction that changes sign never unloads along a secant above its new envelope
-    # (checked against the uniaxial envelope, so that a zero increment stays an unloading)
-    sign_change = (eps_u > 0.0) != (state.uniaxial_strength > 0.0)
-    # round-off of the rotation is relative to the point's largest stress, not to sigma_i
-    slack = LOADING_TOLERANCE * (state.max_equivalent_uniaxial_strain + np.abs(
-        trial).max(axis=1, keepdims=True) / state.secant_modulus)
-    loading = magnitude > state.max_equivalent_uniaxial_strain + slack
-    rows = np.nonzero(sign_change.any(axis=1))[0]
-    if rows.size:
-        uniaxial_strength = np.where(eps_u[rows] > 0.0, params.ft, -params.fc)
-        uniaxial_stress, _ = _envelope(eps_u[rows], uniaxial_strength, np.where(
-            eps_u[rows] > 0.0, params.eps_t, -params.eps_c), params, rows)
-        crossing = secant_line[rows] > uniaxial_stress * (1 + 1e-9)
-        # a direction past its peak on the other sign's branch (cracked, now closing in
-        # compression, or crushed, now in tension) loads only where its secant line meets the
-        # new envelope: its max |eps_iu| belongs to the other branch, and loading onto this
-        # branch at that magnitude makes the stress jump (a closing crack leapt from its crack
-        # secant to the compression envelope: VTT1 cycled between the two at 38.6 mm)
-        damaged = state.cracked[rows] | state.crushed[rows]
-        loading[rows] = (loading[rows] & ~(damaged & sign_change[rows])
-                         | sign_change[rows] & crossing)
+    loading, sign_change = loading_directions(trial, eps_u, state, params)
 
     # Step 5: uniaxial parameters on the ray of the trial stress (errata 1.3, step 5), and the
     # envelope at eps_iu. Only a loading direction reads them: the points with none keep their

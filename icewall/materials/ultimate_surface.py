@@ -363,3 +363,68 @@ def equivalent_uniaxial_peak_strains(sigma_ic: ArrayLike, params: ConcreteParame
     mag = np.where(sig < 0.0, ratio * params.eps_c, sig * params.eps_t / params.ft)
     mag = np.maximum(mag, np.abs(sig) / params.E0)
     return np.where(sig < 0.0, -mag, mag)
+
+
+def _radius_slope_in_cos(c: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
+    """d r / d cos theta of the elliptic trace (eq. 3.16 corrected, r1 clamped as in
+    `meridian_radius`); zero beyond the apex (r2 <= 0), where r = min(r1, r2)."""
+    r1c = np.clip(r1, 0.5 * r2, r2)
+    r12 = r2 * r2 - r1c * r1c
+    dq = 8.0 * r12 * c  # d q / d c, q = 4 r12 c^2
+    root = np.sqrt(np.maximum(0.5 * dq * c + 5.0 * r1c * r1c - 4.0 * r1c * r2, 0.0))
+    e = 2.0 * r1c - r2
+    den = 0.5 * dq * c + e * e
+    valid = (r2 > 0.0) & (den > 0.0)
+    den = np.where(valid, den, 1.0)
+    r = (2.0 * r2 * r12 * c + r2 * e * root) / den
+    droot = np.where(root > 0.0, 0.5 * dq / np.where(root > 0.0, root, 1.0), 0.0)
+    return np.where(valid, (2.0 * r2 * r12 + r2 * e * droot - r * dq) / den, 0.0)
+
+
+def strength_scale_gradient(principal: ArrayLike, scale: ArrayLike, fc: float,
+                            surface: WillamWarnkeSurface, capped: ArrayLike) -> np.ndarray:
+    """d s / d sigma_k (n, 3), in the columns' own order, of s = `strength_scale(principal)`.
+
+    On a ray that meets the surface, f(s sigma / f'c) = 0 (eq. 3.15) gives by implicit
+    differentiation d s / d sigma = -s grad f / (grad f . sigma), grad f from eqs. 3.12-3.18
+    (tau_bar, sigma_bar, cos theta and the meridians, held below ``sigma_limit``). A ray
+    `capped` at max_scale has s = max_scale f'c / max |sigma_i|.
+    """
+    p = np.atleast_2d(np.asarray(principal, dtype=float))
+    s = np.asarray(scale, dtype=float).reshape(-1)
+    order = np.argsort(-p, axis=1, kind="stable")  # sorted as `_sorted`: sigma1 >= sigma2 >= sigma3
+    q = np.take_along_axis(p, order, axis=1) * (s / fc)[:, None]  # on the surface, / f'c
+    mean = q.mean(axis=1, keepdims=True)
+    deviator = q - mean
+    tau = np.sqrt((deviator * deviator).sum(axis=1) / 5.0)
+    dtau = deviator / (5.0 * np.where(tau > 0.0, tau, 1.0))[:, None]
+    x = 2.0 * q[:, 0] - q[:, 1] - q[:, 2]
+    y = np.sqrt(3.0) * (q[:, 1] - q[:, 2])
+    rho = np.hypot(x, y)
+    ok = rho > 1e-12 * np.maximum(np.abs(q[:, 0]), np.abs(q[:, 2]))
+    rho = np.where(ok, rho, 1.0)
+    c = np.where(ok, x / rho, 1.0)
+    dx, dy = np.array([2.0, -1.0, -1.0]), np.sqrt(3.0) * np.array([0.0, 1.0, -1.0])
+    dc = np.where(ok, 1.0 / rho**3, 0.0)[:, None] * (
+        (y * y)[:, None] * dx - (x * y)[:, None] * dy)
+    sigma_bar = mean[:, 0]
+    held = np.maximum(sigma_bar, surface.sigma_limit)
+    above = sigma_bar >= surface.sigma_limit
+    a, b = surface.a, surface.b
+    _, dr_dsigma = _elliptic_radius(c, _poly(a, held), _poly(b, held),
+                                    np.where(above, a[1] + 2.0 * a[2] * held, 0.0),
+                                    np.where(above, b[1] + 2.0 * b[2] * held, 0.0))
+    dr_dc = _radius_slope_in_cos(c, _poly(a, held), _poly(b, held))
+    gradient_sorted = dtau - dr_dc[:, None] * dc - dr_dsigma[:, None] / 3.0  # type: ignore[index]
+    gradient = np.empty_like(p)
+    np.put_along_axis(gradient, order, gradient_sorted, axis=1)
+    along_ray = (gradient * p).sum(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        implicit = -s[:, None] * gradient / along_ray[:, None]
+    largest = np.argmax(np.abs(p), axis=1)
+    cap_slope = np.zeros_like(p)
+    rows = np.arange(p.shape[0])
+    cap_slope[rows, largest] = -s * np.sign(p[rows, largest]) / np.maximum(
+        np.abs(p[rows, largest]), 1e-300)
+    result = np.where(np.asarray(capped, dtype=bool)[:, None], cap_slope, implicit)
+    return np.where(np.isfinite(result), result, 0.0)
