@@ -48,6 +48,23 @@ TENSION_PLATE = "bottom_plate"
 _EPS = 1e-9
 
 
+def stroke_curve(d: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The curve a stroke-controlled test records of a traced path: the points where the
+    control deflection reaches a new maximum. Where the traced path snaps back (the deflection
+    turns back while the load falls, under dissipation control), the machine holds the stroke
+    and the load drops vertically to where the path comes back to that deflection; the loop
+    itself is never recorded. A path whose deflection never turns back is returned as it is."""
+    d, p = np.asarray(d, float), np.asarray(p, float)
+    keep = stroke_mask(d)
+    return d[keep], p[keep]
+
+
+def stroke_mask(d: np.ndarray) -> np.ndarray:
+    """(n,) bool: the points of `stroke_curve`."""
+    d = np.asarray(d, float)
+    return d >= np.maximum.accumulate(d) - _EPS if d.size else np.zeros(0, bool)
+
+
 def _at(d: np.ndarray, p: np.ndarray, x: float) -> float | None:
     """Load at deflection x, interpolated at the first crossing; None if never reached."""
     hit = np.nonzero(d >= x - _EPS)[0]
@@ -183,10 +200,13 @@ def _tension_plate(hist: dict, fields: dict, peak_step: int) -> tuple[dict | Non
     return None, None
 
 
-def extract(source, *, residual_deflection: float = RESIDUAL_DEFLECTION) -> dict:
+def extract(source, *, residual_deflection: float = RESIDUAL_DEFLECTION,
+            curve_deflections: Sequence[float] = ()) -> dict:
     """Key figures (JSON-ready dict) of a result file path, a (deflection, load) pair, or a
     mapping of history columns (deflection or control_displacement, load, optional step,
-    preload_stage, cracked_in_plane, crushed, yielded). Definitions: module docstring."""
+    preload_stage, cracked_in_plane, crushed, yielded). Definitions: module docstring.
+    `curve_deflections`: also the loads at these control deflections ("curve_loads", None
+    where the run did not reach one)."""
     hist, info = _normalise(source)
     fields = info.pop("_fields", {})
     d_all, p_all = hist["deflection"], hist["load"]
@@ -197,9 +217,10 @@ def extract(source, *, residual_deflection: float = RESIDUAL_DEFLECTION) -> dict
     out: dict = {**info, "n_steps": int(control.sum()), "start_deflection": d0}
     if not control.any():
         return {**out, "peak_load": None}
-    steps = np.asarray(hist["step"])[control]
     d = np.concatenate([[d0], d_all[control]])
-    p = np.concatenate([[0.0], p_all[control]])
+    keep = stroke_mask(d)  # the curve a stroke-controlled test records (snap-backs dropped)
+    d, p = d[keep], np.concatenate([[0.0], p_all[control]])[keep]
+    steps = np.asarray(hist["step"])[control][keep[1:]]
     k = int(np.argmax(p[1:])) + 1
     peak, d_peak, peak_step = float(p[k]), float(d[k]), int(steps[k - 1])
     a = max(d_peak + PLATEAU_OFFSET, PLATEAU_START_MIN)
@@ -215,6 +236,7 @@ def extract(source, *, residual_deflection: float = RESIDUAL_DEFLECTION) -> dict
         "residual_ratio_40": None if res40 is None or peak <= 0 else res40 / peak,
         "initial_stiffness": _secant(d, p, STIFFNESS_FRACTION * peak),
         "first_step_stiffness": (float(p[1] / (d[1] - d0)) if d[1] - d0 > _EPS else None),
+        "curve_loads": [_at(d, p, float(x)) for x in curve_deflections],
         "first_cracking": _event(hist, "cracked_in_plane", peak_step),
         "first_crushing": _event(hist, "crushed", peak_step),
         "first_yield": _event(hist, "yielded", peak_step),

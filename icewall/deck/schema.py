@@ -267,6 +267,11 @@ class Analysis:
     gauss: int = option(3, doc="Gauss rule n x n", choices=(2, 3, 4))
     element_size: float = option(75.0, doc="target element size", unit="mm",
                                  exclusive_minimum=0.0)
+    scheme: str = option("secant", doc="iteration of the nonlinear solver: secant (the thesis' "
+                         "secant iteration with relaxation, chatter damping and fallbacks) or "
+                         "newton (Newton-Raphson with the consistent tangent, line search and "
+                         "automatic step size; set the tolerances to 1e-4)",
+                         choices=("secant", "newton"))
     tolerance_displacement: float = option(0.05, doc="displacement norm tolerance (eq. 4.4)",
                                            exclusive_minimum=0.0, maximum=1.0)
     tolerance_load: float = option(0.05, doc="load norm tolerance (eq. 4.5)",

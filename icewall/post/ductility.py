@@ -146,8 +146,10 @@ def result_ductility(result) -> dict:
     if not control.any():
         return {"verdict": "undecided", "message": "no displacement-control steps"}
     origin = float(d[~control][-1]) if (~control).any() else 0.0
+    from icewall.analysis.extract import stroke_curve
+
     try:
-        out = csa_ductility(d[control], p[control], origin=origin).as_dict()
+        out = csa_ductility(*stroke_curve(d[control], p[control]), origin=origin).as_dict()
     except ValueError as exc:  # e.g. a snap-back: the deflection went back
         return {"verdict": "undecided", "message": f"cannot check this curve: {exc}"}
     unit = result.attrs.get("load_unit") or "load unit"

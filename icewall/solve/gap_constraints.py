@@ -119,6 +119,19 @@ class GapConstraints(SupportConstraints):
         rhs[self.n_equations:][self._redundant_active()] = 0.0
         return rhs
 
+    def constraint_residuals(self, u: np.ndarray) -> tuple[float, float]:
+        """(largest gap violation of an enforced row (mm), largest multiplier off its
+        prescribed value (N)) at the current pair states: both vanish when every FIXED/SLIP
+        target and every FREE/SLIP force holds, so a pair that changed state without moving
+        the equilibrium (a pair with no force and no gap) does not block convergence."""
+        bottom = augmented_rhs(np.zeros(self.n_equations), u, self.C, self.state, self.mu,
+                               self.fixed, self.implicit_slip)[self.n_equations:]
+        bottom[self._redundant_active()] = 0.0
+        enforced = upper_rows(self.state, self.implicit_slip)
+        gaps = np.abs(bottom[active_rows(self.state)])
+        forces = np.abs(bottom[~enforced])
+        return float(gaps.max(initial=0.0)), float(forces.max(initial=0.0))
+
     def apply(self, multiplier_increment: np.ndarray, u: np.ndarray) -> int:
         _, d_N, d_T = split_solution(np.concatenate([np.zeros(self.n_equations),
                                                      multiplier_increment]), self.n_equations)

@@ -18,6 +18,7 @@ from icewall.model.structure import Evaluation, Structure
 from icewall.solve.constraints import SupportConstraints
 from icewall.solve.control import Increment, PathState, Problem, follow_path
 from icewall.solve.energy import EnergyAccount, secant_elastic_energy
+from icewall.solve.path import follow_path as follow_newton_path
 from icewall.solve.settings import solver_settings
 
 
@@ -132,7 +133,8 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
     preload = np.zeros_like(start.u) if model.preload is None else model.preload
     previous_u = start.u
     previous_load = start.load_factor * model.reference_load + start.preload_factor * preload
-    for inc, path in follow_path(problem, settings, start, resume=resume is not None):
+    follow = follow_newton_path if settings.scheme == "newton" else follow_path
+    for inc, path in follow(problem, settings, start, resume=resume is not None):
         ev = inc.evaluation
         load = inc.load_factor * model.reference_load + inc.preload_factor * preload
         energy.add_external(previous_load, load, inc.u - previous_u)

@@ -26,6 +26,8 @@ class SolverSettings:
     # concrete E_i of the iteration matrix: committed (the trial state's secants) | returned
     # (never stiffer than the stress the update returned: a fallback, control._schemes)
     iteration_secant: str = "committed"
+    scheme: str = "secant"  # secant (the thesis' iteration) | newton (solve/path.py)
+    target_iterations: int = 6  # Newton: iterations per step the step-size controller aims at
 
 
 def solver_settings(deck: Deck) -> SolverSettings:
@@ -37,4 +39,5 @@ def solver_settings(deck: Deck) -> SolverSettings:
         preload_increments=a.preload_increments,
         reset_slip_each_step=deck.materials.interface.reset_slip_each_step,
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
-        on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps)
+        on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps,
+        scheme=a.scheme)

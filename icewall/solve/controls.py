@@ -1,0 +1,82 @@
+"""Path-following controls: the extra equation that fixes the load factor of an increment.
+
+Each control is one linear constraint phi(u, P) = g.u + h P - c = 0 on the displacements u and
+the load factor P (the jack load). With the bordering of eq. 3.48 a Newton step is
+du = dP q1 + q2 (q1: the response to the reference load, q2: to the unbalance), and the
+linearised constraint gives dP = -(phi + g.q2) / (g.q1 + h). Load control has no constraint
+(dP = 0).
+
+- `DisplacementControl` (thesis 3.5): the control deflection -u[c] reaches its target.
+- `DissipationControl` (Gutierrez 2004; Verhoosel, Remmers & Gutierrez 2009, eq. 19): the
+  energy released in the increment, G = 1/2 (f0.du - dP R.u0) with f0 = P0 R + F_pre the
+  external force at its start, equals tau > 0. It follows the equilibrium path through the
+  snap-backs of localised softening, where the control deflection turns back and displacement
+  control has no solution; G is the dissipation of a secant-unloading (damage-like) material,
+  and a monotone path parameter of the walls' cracking and crushing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class LoadControl:
+    """The load factor is held (the preload's increments are applied by load control)."""
+
+    def correction(self, u: np.ndarray, P: float, q1: np.ndarray, q2: np.ndarray) -> float:
+        return 0.0
+
+
+@dataclass(frozen=True)
+class DisplacementControl:
+    """deflection = -u[equation] = target (eq. 3.48, errata §3)."""
+
+    equation: int
+    target: float
+
+    def residual(self, u: np.ndarray, P: float) -> float:
+        return -float(u[self.equation]) - self.target
+
+    def correction(self, u: np.ndarray, P: float, q1: np.ndarray, q2: np.ndarray) -> float:
+        return _correction(self.residual(u, P), -q1[self.equation], -q2[self.equation], 0.0)
+
+
+@dataclass(frozen=True)
+class DissipationControl:
+    """Energy released in the increment from (u0, P0) equals `released` (N mm)."""
+
+    u0: np.ndarray
+    P0: float
+    reference: np.ndarray  # R on the free equations
+    preload: np.ndarray  # the constant in-plane force on the free equations (zero without)
+    released: float
+
+    def energy(self, u: np.ndarray, P: float) -> float:
+        """G = 1/2 ((P0 R + F_pre).(u - u0) - (P - P0) R.u0)."""
+        f0 = self.P0 * self.reference + self.preload
+        return 0.5 * (float(f0 @ (u - self.u0)) - (P - self.P0) * float(self.reference @ self.u0))
+
+    def residual(self, u: np.ndarray, P: float) -> float:
+        return self.energy(u, P) - self.released
+
+    def correction(self, u: np.ndarray, P: float, q1: np.ndarray, q2: np.ndarray) -> float:
+        g = 0.5 * (self.P0 * self.reference + self.preload)
+        h = -0.5 * float(self.reference @ self.u0)
+        return _correction(self.residual(u, P), float(g @ q1), float(g @ q2), h)
+
+
+def _correction(phi: float, g_q1: float, g_q2: float, h: float) -> float:
+    """dP of the linearised constraint phi + g.(dP q1 + q2) + h dP = 0."""
+    denominator = g_q1 + h
+    if not abs(denominator) > 0.0 or not np.isfinite(denominator):
+        return float("nan")
+    return -(phi + g_q2) / denominator
+
+
+def released_energy(u0: np.ndarray, P0: float, u: np.ndarray, P: float, reference: np.ndarray,
+                    preload: np.ndarray) -> float:
+    """G of an increment (DissipationControl.energy) between two states."""
+    return DissipationControl(u0, P0, reference, preload, 0.0).energy(u, P)

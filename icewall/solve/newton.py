@@ -1,0 +1,184 @@
+"""Newton-Raphson iteration of one increment with the consistent tangent and a line search.
+
+One iteration: evaluate the structure at the current iterate (stress, consistent tangent,
+internal force), factorise the augmented tangent (supports and gap elements, whose pair states
+are updated after every solve: an active-set Newton on the contact and stick-slip conditions),
+solve for the reference load and the unbalance (bordering, eq. 3.48: the control
+displacement reaches its target exactly after every full step), and take the step scaled by
+a backtracking line search on the equilibrium norm. Converged means: displacement norm (eq.
+4.4) and load norm (eq. 4.5) within the tolerances, and no pair changed state in the last
+iteration; the constitutive law is never frozen or relaxed, so a converged increment is an
+equilibrium of the law as it is.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from icewall.solve.control import Increment, PathState, Problem, StepFailed, _external_force_norm
+from icewall.solve.controls import LoadControl
+from icewall.solve.settings import SolverSettings
+
+log = logging.getLogger(__name__)
+
+LINE_SEARCH_CUTS = 5
+"""Halvings of the step length tried when a full Newton step raises the unbalance."""
+LINE_SEARCH_RISE = 4.0
+"""While the pair states still change, a step is backtracked only when its unbalance exceeds
+this multiple of the current one (the active set walks the load; a decrease is not required);
+once they have settled, whenever it does not decrease (Armijo with a zero slope factor)."""
+
+
+def _norm(x: np.ndarray) -> float:
+    return float(np.sqrt(x @ x))
+
+
+@dataclass
+class Iterate:
+    """A point of the Newton iteration: displacements, load factor and what they give."""
+
+    u: np.ndarray
+    load_factor: float
+    evaluation: object
+    structural: np.ndarray  # F_ext - F_int on the free equations, without gap forces
+    unbalance: np.ndarray  # structural - C^T lam
+    scale: float  # the eq. 4.5 reference: external loads and reactions
+
+    @property
+    def load_norm(self) -> float:
+        """Eq. 4.5."""
+        return _norm(self.unbalance) / self.scale
+
+
+def _evaluate(problem: Problem, start: PathState, u: np.ndarray, P: float,
+              F_pre: np.ndarray, R: np.ndarray, lam_force: np.ndarray | None = None) -> Iterate:
+    s, c = problem.structure, problem.constraints
+    ev = s.evaluate(u, start.states, tangent=True)
+    if not np.all(np.isfinite(ev.internal_force)):
+        raise StepFailed("non-finite internal forces", "NaN")
+    external = P * R + c.restrict(F_pre)
+    structural = c.restrict(external - ev.internal_force)
+    gap_force = c.restrict(c.constraint_force()) if lam_force is None else lam_force
+    unbalance = structural - gap_force
+    scale = max(_external_force_norm(c, external, ev.internal_force), start.load_scale, 1e-30)
+    return Iterate(u, P, ev, structural, unbalance, scale)
+
+
+def _trial_gap_force(problem: Problem, multiplier_increment: np.ndarray, eta: float):
+    """C^T (lam + eta dlam) on the free equations: the gap forces of a trial step length."""
+    c = problem.constraints
+    C = getattr(c, "C", None)
+    if C is None or multiplier_increment.size == 0:
+        return c.restrict(np.zeros(c.n_equations))
+    return c.restrict(C.T @ (c.state.lam + eta * multiplier_increment))
+
+
+def newton_increment(problem: Problem, settings: SolverSettings, start: PathState,
+                     control, preload_factor: float, kind: str = "control") -> Increment:
+    """Iterate one increment to convergence by Newton-Raphson under `control`
+    (icewall.solve.controls: load, displacement or dissipation control; the preload at
+    `preload_factor`). Raises StepFailed when it does not converge in
+    `settings.max_iterations`."""
+    c = problem.constraints
+    R = c.restrict(problem.reference_load)
+    F_pre = (np.zeros_like(start.u) if problem.preload is None
+             else preload_factor * problem.preload)
+    c.begin_step()
+    forensics: dict[str, list[int]] = {"gap_flips": [], "line_search": [],
+                                       "gauss_flag_changes": []}
+    current = _evaluate(problem, start, start.u.copy(), start.load_factor, F_pre, R)
+    flags = problem.point_flags(current.evaluation.states)
+    disp_norm, flips = math.inf, 0
+    for iteration in range(1, settings.max_iterations + 1):
+        log.debug("newton %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
+                  "gap flips %d, Gauss-point flag changes %s, step length %s", iteration,
+                  disp_norm, current.load_norm, current.load_factor, flips,
+                  (forensics["gauss_flag_changes"] or ["-"])[-1],
+                  (forensics["line_search"] or ["-"])[-1])
+        # after the first correction only the load norm can be judged: met 100 times tighter
+        # (a linear problem then converges in one iteration), as in the secant scheme
+        displacement_ok = disp_norm <= settings.tolerance_displacement or (
+            iteration == 2 and current.load_norm <= 0.01 * settings.tolerance_load)
+        if (iteration > 1 and displacement_ok and current.load_norm <= settings.tolerance_load
+                and (flips == 0 or _constraints_hold(problem, settings, current))):
+            return Increment(kind, -float(current.u[problem.control_equation]),
+                             current.load_factor, preload_factor, iteration - 1, disp_norm,
+                             current.load_norm, current.evaluation, current.u, forensics)
+        du, dP, dm = _newton_direction(problem, current, control)
+        eta, trial = _line_search(problem, start, current, du, dP, dm, F_pre, R,
+                                  LINE_SEARCH_RISE if flips else 1.0)
+        forensics["line_search"].append(round(math.log2(1.0 / eta)))
+        flips = c.apply(eta * dm, trial.u)
+        forensics["gap_flips"].append(int(flips))
+        new_flags = problem.point_flags(trial.evaluation.states)
+        forensics["gauss_flag_changes"].append(_count_changes(flags, new_flags))
+        flags = new_flags
+        # the gap forces after the pair states were updated
+        trial.unbalance = trial.structural - c.restrict(c.constraint_force())
+        disp_norm = eta * _norm(du) / max(_norm(trial.u), 1e-30)  # eq. 4.4
+        current = trial
+    raise StepFailed(f"no convergence in {settings.max_iterations} Newton iterations "
+                     f"(displacement norm {disp_norm:.3g}, load norm {current.load_norm:.3g})",
+                     "non-convergence")
+
+
+def _constraints_hold(problem: Problem, settings: SolverSettings, current: Iterate) -> bool:
+    """After pair state changes: the new states' targets and forces hold to the tolerances
+    (gaps against the displacement norm of eq. 4.4, forces against the load norm of eq. 4.5),
+    i.e. the pairs that changed carried no force and had no gap."""
+    gap, force = problem.constraints.constraint_residuals(current.u)
+    return (gap <= settings.tolerance_displacement * _norm(current.u)
+            and force <= settings.tolerance_load * current.scale)
+
+
+def _count_changes(before, after) -> int:
+    """Gauss points whose crack/crush/softening/axis flags differ between two iterates."""
+    return int(sum(np.count_nonzero(np.any(a != b, axis=1))
+                   for a, b in zip(before, after, strict=True) if a is not None))
+
+
+def _newton_direction(problem: Problem, current: Iterate, control
+                      ) -> tuple[np.ndarray, float, np.ndarray]:
+    """(du, dP, dlam) of a full Newton step: one factorisation of the augmented tangent, two
+    solves (reference load and unbalance), the load factor from the control's row."""
+    s, c = problem.structure, problem.constraints
+    factor = c.factorize(s.stiffness(current.evaluation))
+    rhs_unbalance = c.unbalance_rhs(current.structural, current.u)
+    if isinstance(control, LoadControl):
+        du, dm = c.split(factor.solve(rhs_unbalance))
+        return du, 0.0, dm
+    solution = factor.solve(np.column_stack([c.reference_rhs(problem.reference_load),
+                                             rhs_unbalance]))
+    (q1, q2), (m1, m2) = c.split(solution)[0].T, c.split(solution)[1].T
+    dP = control.correction(current.u, current.load_factor, q1, q2)
+    if not math.isfinite(dP):
+        raise StepFailed("the control no longer fixes the load factor (singular bordering)",
+                         "snap-back")
+    du, dm = dP * q1 + q2, dP * m1 + m2
+    if not np.all(np.isfinite(du)):
+        raise StepFailed("non-finite displacement correction", "NaN")
+    return du, dP, dm
+
+
+def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.ndarray,
+                 dP: float, dm: np.ndarray, F_pre: np.ndarray, R: np.ndarray,
+                 rise: float) -> tuple[float, Iterate]:
+    """Step length eta and the iterate it gives: the full step unless its unbalance (with the
+    gap multipliers moved by eta dlam at their current states) exceeds `rise` times the
+    current one; then halve, keeping the best step length tried."""
+    eta, best = 1.0, None
+    reference = _norm(current.unbalance)
+    for _ in range(LINE_SEARCH_CUTS + 1):
+        trial = _evaluate(problem, start, current.u + eta * du, current.load_factor + eta * dP,
+                          F_pre, R, _trial_gap_force(problem, dm, eta))
+        merit = _norm(trial.unbalance)
+        if best is None or merit < best[0]:
+            best = (merit, eta, trial)
+        if merit <= rise * reference or reference == 0.0:
+            return eta, trial
+        eta *= 0.5
+    return best[1], best[2]

@@ -1,0 +1,178 @@
+"""Path following with the converged (Newton) scheme: one loop that proposes a step, iterates
+it to convergence, and yields it or cuts it. No fallback schemes and no frozen points: a step
+that does not converge is cut, and the run stops with a reason when the smallest fails.
+
+The preload goes by load control. The control stage goes by displacement control while it
+converges; where it cannot (a snap-back of the control deflection: a crack or a crushing band
+releases more energy than the rest of the wall can take up at a fixed deflection), the steps
+are taken under dissipation control (`controls.DissipationControl`), which follows the path
+through the snap-back, until the load and the deflection rise together again. The step size
+(deflection or released energy) follows the iteration count (`steps.StepSizeController`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Iterator
+
+import numpy as np
+
+from icewall.errors import ConvergenceError
+from icewall.solve.control import (
+    Increment,
+    PathState,
+    Problem,
+    StepFailed,
+    _external_force_norm,
+)
+from icewall.solve.controls import (
+    DisplacementControl,
+    DissipationControl,
+    LoadControl,
+    released_energy,
+)
+from icewall.solve.newton import newton_increment
+from icewall.solve.settings import SolverSettings
+from icewall.solve.steps import StepSizeController
+
+log = logging.getLogger(__name__)
+
+FIRST_RELEASE = 1e-4
+"""First dissipation step after a switch, as a fraction of the external work 1/2 f.u so far."""
+SMALLEST_RELEASE = 1e-9
+"""Dissipation steps below this fraction of the external work stop the run."""
+
+
+def _controller(settings: SolverSettings, largest: float) -> StepSizeController:
+    return StepSizeController(largest=largest,
+                              smallest=largest / 2 ** settings.max_step_cuts,
+                              target_iterations=settings.target_iterations)
+
+
+class _Path:
+    """What the control stage carries from step to step."""
+
+    def __init__(self, problem: Problem, state: PathState, preload: float) -> None:
+        c = problem.constraints
+        self.R = c.restrict(problem.reference_load)
+        self.F_pre = (np.zeros_like(self.R) if problem.preload is None
+                      else c.restrict(preload * problem.preload))
+        self.problem, self.state = problem, state
+
+    def work(self) -> float:
+        """1/2 f.u of the current state (N mm): the scale of the released energies."""
+        f = self.state.load_factor * self.R + self.F_pre
+        return 0.5 * abs(float(f @ self.state.u))
+
+    def released(self, inc: Increment) -> float:
+        return released_energy(self.state.u, self.state.load_factor, inc.u, inc.load_factor,
+                               self.R, self.F_pre)
+
+
+def _advance_preload(problem: Problem, settings: SolverSettings, state: PathState,
+                     resume: tuple) -> Iterator[tuple[Increment, PathState]]:
+    c = problem.constraints
+    steps = _controller(settings, 1.0 / settings.preload_increments)
+    current, size = (resume[0], resume[1]) if resume else (state.preload_factor, steps.largest)
+    while current < 1.0 - 1e-12:
+        goal = min(current + size, 1.0)
+        tic = time.perf_counter()
+        try:
+            inc = newton_increment(problem, settings, state, LoadControl(), goal, "preload")
+        except (StepFailed, ConvergenceError) as exc:
+            c.rollback()
+            size = steps.after_failure(size, f"preload {goal:.4g}",
+                                       getattr(exc, "reason", "non-convergence"), str(exc))
+            continue
+        c.commit()
+        inc.wall_time = time.perf_counter() - tic
+        current, size = goal, steps.after_success(size, inc.iterations)
+        state = _next_state(problem, state, inc, ("preload", current, size, 0.0))
+        yield inc, state
+
+
+def _next_state(problem: Problem, state: PathState, inc: Increment, resume: tuple) -> PathState:
+    c = problem.constraints
+    applied = c.restrict(inc.load_factor * problem.reference_load + (
+        0.0 if problem.preload is None else inc.preload_factor * problem.preload))
+    scale = max(state.load_scale, _external_force_norm(c, applied,
+                                                       inc.evaluation.internal_force))
+    return PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
+                     inc.preload_factor, scale, resume)
+
+
+def _advance_control(problem: Problem, settings: SolverSettings, state: PathState,
+                     preload: float, resume: tuple) -> Iterator[tuple[Increment, PathState]]:
+    """Displacement control to the target, dissipation control through snap-backs."""
+    c = problem.constraints
+    steps = _controller(settings, settings.increment)
+    size, mode, release = steps.largest, "displacement", 0.0
+    if resume:  # (size, release, 1.0 while under dissipation control): _next_state below
+        size, release = resume[0], resume[1]
+        mode = "dissipation" if resume[2] else "displacement"
+    path = _Path(problem, state, preload)
+    while -float(state.u[problem.control_equation]) < settings.target - 1e-12 * max(
+            1.0, settings.target):
+        current = -float(state.u[problem.control_equation])
+        if mode == "displacement":
+            goal = min(current + size, settings.target)
+            control = DisplacementControl(problem.control_equation, goal)
+            where = f"control {goal:.4g}"
+        else:
+            control = DissipationControl(state.u, state.load_factor, path.R, path.F_pre, release)
+            where = f"control {current:.4g} (releasing {release:.3g} N mm)"
+        tic = time.perf_counter()
+        try:
+            inc = newton_increment(problem, settings, state, control, preload)
+        except (StepFailed, ConvergenceError) as exc:
+            c.rollback()
+            reason = getattr(exc, "reason", "non-convergence")
+            log.info("%s: %s", where, exc)
+            if mode == "displacement" and reason != "singular system" and (
+                    size <= steps.smallest * (1 + 1e-9)):
+                # no equilibrium at the next deflection: a snap-back, followed by dissipation
+                mode, release = "dissipation", FIRST_RELEASE * path.work()
+                log.info("%s: switching to dissipation control", where)
+                continue
+            if mode == "dissipation":
+                release *= 0.5
+                if release < SMALLEST_RELEASE * path.work():
+                    raise ConvergenceError(f"{exc} at {where}, also under dissipation "
+                                           "control at the smallest release",
+                                           reason=reason) from None
+                continue
+            size = steps.after_failure(size, where, reason, str(exc))
+            continue
+        c.commit()
+        inc.wall_time = time.perf_counter() - tic
+        d_deflection = inc.control_displacement - current
+        d_load = inc.load_factor - state.load_factor
+        if mode == "dissipation":
+            inc.snap_back = d_deflection < 0.0
+            growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
+            release *= min(2.0, max(0.5, growth))
+            if d_deflection > 0.0 and d_load > 0.0:  # rising again: back to the deflection
+                mode, size = "displacement", max(steps.smallest, min(steps.largest,
+                                                                     d_deflection))
+        else:
+            size = steps.after_success(size, inc.iterations)
+        state = _next_state(problem, state, inc, ("control", size, release,
+                                                  float(mode == "dissipation")))
+        path.state = state
+        yield inc, state
+
+
+def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,
+                resume: bool = False) -> Iterator[tuple[Increment, PathState]]:
+    """Preload by load control (if any), then the control stage to the target deflection;
+    `resume` goes on from where `initial.resume` says."""
+    current = initial
+    stage, start = (initial.resume[0], initial.resume[1:]) if resume else ("", ())
+    if problem.preload is not None and stage != "control":
+        for inc, current in _advance_preload(problem, settings, initial, start):
+            yield inc, current
+        start = ()
+    preload = 1.0 if problem.preload is not None else 0.0
+    yield from _advance_control(problem, settings, current, preload, start)

@@ -1,0 +1,119 @@
+"""The Newton scheme (solve/newton.py, solve/path.py) against closed forms: a linear bar in one
+iteration, a softening bar along its descending branch with a consistent tangent, and the step
+size controller."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from softening_bar import SofteningParams, bar_problem, settings
+from test_solve_control import analytic_softening_load
+
+from icewall.errors import ConvergenceError
+from icewall.model.materials import MaterialGroup
+from icewall.model.structure import Structure
+from icewall.solve.path import follow_path
+from icewall.solve.steps import StepSizeController
+
+
+def softening_tangent_law(strain, kappa, p: SofteningParams):
+    """The softening bar's law with its consistent tangent: E before the peak, the softening
+    slope on the loading branch beyond it, the secant on unloading."""
+    eps = strain[:, 0]
+    peak = p.strength / p.E
+    loading = eps >= kappa
+    k = np.maximum(kappa, eps)
+    slope = -p.strength / (p.failure_strain - peak)
+    envelope = np.where(k <= peak, p.E * k, np.maximum(p.strength + slope * (k - peak), 0.0))
+    secant = np.where(k > 0, envelope / np.maximum(k, 1e-300), p.E)
+    stress = np.zeros_like(strain)
+    stress[:, 0] = np.where(loading, np.where(eps > 0, envelope, p.E * eps), secant * eps)
+    stress[:, 1], stress[:, 2], stress[:, 3] = (p.E * strain[:, 1], p.E * strain[:, 2],
+                                                0.5 * p.E * strain[:, 3])
+    D = np.zeros((len(eps), 4, 4))
+    softening = loading & (k >= peak * (1 - 1e-12)) & (envelope > 0)
+    # at the peak a loading point takes the softening branch (its strain may round below it)
+    ascending = k < peak * (1 - 1e-12)
+    D[:, 0, 0] = np.where(loading & ~ascending, np.where(softening, slope, 0.0),
+                          np.where(ascending, p.E, secant))
+    D[:, 1, 1] = D[:, 2, 2] = p.E
+    D[:, 3, 3] = 0.5 * p.E
+    return stress, D, k
+
+
+def newton_bar(length, n_el, E=30000.0, strength=3.0, weak=0.9, failure_strain=0.002):
+    problem, initial = bar_problem(length, n_el, E, strength, weak, failure_strain)
+    s = problem.structure
+    group = s.groups[0]
+    tangent_group = MaterialGroup(group.name, group.model, group.cells, softening_tangent_law,
+                                  group.params, group.initial_state)
+    structure = Structure(s.kinematics, s.assembler, (tangent_group,))
+    return replace(problem, structure=structure), initial
+
+
+def newton_settings(target, increment, tolerance=1e-9, iterations=25, cuts=6):
+    return replace(settings(target, increment, tolerance, iterations, cuts), scheme="newton")
+
+
+def test_linear_bar_converges_in_one_newton_iteration():
+    problem, initial = newton_bar(100.0, 5, strength=1e9)
+    for inc, _ in follow_path(problem, newton_settings(0.05, 0.01), initial):
+        assert inc.iterations == 1
+        assert inc.load_factor == pytest.approx(30000.0 * inc.control_displacement / 100 * 10,
+                                                rel=1e-12)
+
+
+def test_softening_bar_newton_traces_the_closed_form_branch():
+    length, n_el, E, f, weak, eps_f = 100.0, 10, 30000.0, 3.0, 0.9, 0.002
+    problem, initial = newton_bar(length, n_el, E, f, weak, eps_f)
+    steps = list(follow_path(problem, newton_settings(0.019, 0.001), initial))
+    d = np.array([inc.control_displacement for inc, _ in steps])
+    P = np.array([inc.load_factor for inc, _ in steps])
+    assert d[-1] == pytest.approx(0.019)
+    expected = [analytic_softening_load(x, length, length / n_el, E, weak * f, eps_f) for x in d]
+    assert np.allclose(P, expected, rtol=1e-8, atol=1e-8 * max(expected))
+    peak = int(np.argmax(P))
+    assert 0 < peak < len(P) - 1 and np.all(np.diff(P[peak:]) < 0)
+    # a consistent tangent: no step needs more than a few iterations (piecewise-linear law)
+    assert max(inc.iterations for inc, _ in steps) <= 4
+    for inc, _ in steps:  # the first correction of a step is judged by the load norm alone
+        assert inc.load_norm <= 1e-11 or (inc.load_norm <= 1e-9
+                                          and inc.displacement_norm <= 1e-9)
+
+
+def test_snap_back_is_traced_by_dissipation_control():
+    # (L - h)/E < h (eps_f - eps0)/f fails: the softening branch turns back in the end
+    # displacement. Displacement control stalls at the peak; dissipation control follows the
+    # snap-back (deflection and load falling together) down to the separated bar.
+    length, h, E, f, eps_f, area = 1000.0, 100.0, 30000.0, 0.9 * 3.0, 0.0003, 10.0
+    problem, initial = newton_bar(length, 10, failure_strain=eps_f)
+    steps = []
+    with pytest.raises(ConvergenceError):  # the bar separates: no load can be carried
+        for inc, _ in follow_path(problem, newton_settings(0.5, 0.02, cuts=3), initial):
+            steps.append(inc)
+    d = np.array([inc.control_displacement for inc in steps])
+    P = np.array([inc.load_factor for inc in steps])
+    peak = int(np.argmax(P))
+    assert P[peak] == pytest.approx(f * area, rel=1e-9)
+    ascending = length * (P / area) / E
+    sigma = P / area
+    softened = (length - h) * sigma / E + h * (f / E + (f - sigma) / f * (eps_f - f / E))
+    assert np.allclose(d[:peak + 1], ascending[:peak + 1], rtol=1e-9)
+    assert np.allclose(d[peak + 1:], softened[peak + 1:], rtol=1e-8)  # the closed form
+    assert np.all(np.diff(d[peak:]) < 0) and np.all(np.diff(P[peak:]) < 0)  # snap-back
+    assert all(inc.snap_back for inc in steps[peak + 1:])
+    assert P[-1] < 0.01 * P[peak] and d[-1] == pytest.approx(h * eps_f, rel=0.01)
+
+
+def test_step_size_controller_aims_at_the_target_iterations():
+    steps = StepSizeController(largest=1.0, smallest=1.0 / 64, target_iterations=6)
+    assert steps.after_success(0.25, 6) == pytest.approx(0.25)
+    assert steps.after_success(0.25, 2) == pytest.approx(0.25 * 3 ** 0.5)
+    assert steps.after_success(0.25, 1) == pytest.approx(0.5)  # at most doubled
+    assert steps.after_success(0.8, 1) == 1.0  # never above the deck's increment
+    assert steps.after_success(0.25, 100) == pytest.approx(0.125)  # at most halved
+    assert steps.after_failure(0.25, "x", "non-convergence", "m") == 0.125
+    with pytest.raises(ConvergenceError, match="smallest step"):
+        steps.after_failure(1.0 / 64, "control 3", "non-convergence", "no convergence")
