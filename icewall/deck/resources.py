@@ -22,6 +22,8 @@ MAX_STEPS = 100_000
 """Control plus preload steps above which a run is refused (a day at 1 s per step)."""
 MAX_ELEMENTS = 200_000
 """Elements above which a mesh is refused (about 1.2 million equations)."""
+MAX_RUNS = 10_000
+"""Runs of one sweep above which it is refused (icewall.analysis.sweep.check_run_count)."""
 HOURS_WARNING = 1.0
 """Estimated run time (hours) above which check and run warn."""
 NONLINEAR_ITERATIONS_PER_STEP = 30
