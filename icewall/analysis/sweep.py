@@ -82,12 +82,13 @@ def _yaml_text(value) -> str:
 
 
 def _read_sweep_file(path: str | Path) -> tuple[list[str], dict, dict]:
+    from icewall.deck.yamlsrc import load_yaml
+
     try:
-        data = yaml.safe_load(Path(path).read_text()) or {}
-    except OSError as exc:
-        raise DeckError(f"cannot read the sweep file: {exc.strerror}", str(path)) from None
-    except yaml.YAMLError as exc:
-        raise DeckError(f"YAML syntax error: {exc}", str(path)) from None
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DeckError(f"cannot read the sweep file: {exc}", str(path)) from None
+    data = load_yaml(text, str(path)) or {}  # the deck reader's YAML: one-line errors
     if not isinstance(data, dict) or set(data) - {"decks", "vary", "fixed"}:
         raise DeckError("a sweep file is a mapping of decks, vary, fixed", str(path))
     base = Path(path).parent

@@ -71,6 +71,16 @@ def test_yaml_exponent_floats_are_numbers():
         load_deck_text(text, "cf4.yaml", ["materials.steel.E=e5"])
 
 
+def test_sweep_file_exponent_floats_are_numbers(tmp_path):
+    from icewall.analysis.sweep import expand_jobs
+
+    sweep_file = tmp_path / "sweep.yaml"
+    sweep_file.write_text(f"decks: [{CF4}]\nvary: {{materials.steel.E: [2.0e5, 2.1e5]}}\n")
+    jobs = expand_jobs(sweep_file=sweep_file, outdir=tmp_path)
+    assert [load_deck(j.deck, j.overrides).deck.materials.steel.E for j in jobs] == [2.0e5,
+                                                                                    2.1e5]
+
+
 def test_yaml_merge_keys_are_read():
     text = CF4.read_text().replace("  interface:\n", "  bearing_plates: &elastic {E: 210000.0, "
                                    "nu: 0.3}\n  legs:\n    <<: *elastic\n    nu: 0.25\n"

@@ -51,6 +51,9 @@ def _cases():
         "yaml-mapping-nested-3000": (lambda t, u, r: ["check", _write(
             t / "deep2.yaml", _deck_text() + "".join("  " * i + f"k{i}:\n" for i in range(3000))
             + "  " * 3000 + "v: 1\n")], None, 2, "nested"),
+        "sweep-file-nested-5000": (lambda t, u, r: ["sweep", "-f", _write(
+            t / "sweep.yaml", "decks: " + "[" * 5000 + "]" * 5000 + "\n"), "--dry-run"], None,
+                                   2, "nested"),
         "nul-in-specimen-name": (lambda t, u, r: [
             "run", _write(t / "nul.yaml", _deck_text(**{"name: CF-4": 'name: "CF\\0-4"'})),
             *_sets(LINEAR), "-q", "-o", t / "out"], None, 2, "NUL"),
