@@ -38,10 +38,10 @@ DOFS_PER_ELEMENT = {"quad8": 16, "quad4": 8}
 class Estimate:
     """Order-of-magnitude cost of one run of a deck."""
 
-    n_steps: int            # control steps + preload increments, no cuts
-    n_steps_with_cuts: int  # every control step cut max_step_cuts times (worst case)
-    n_elements: int
-    n_equations: int
+    n_steps: int | float    # control steps + preload increments, no cuts (float: absurd)
+    n_steps_with_cuts: int | float  # every control step cut max_step_cuts times (worst case)
+    n_elements: int | float
+    n_equations: int | float
     memory_bytes: float     # stiffness, factors, Gauss-point state, per-step arrays
     output_bytes: float     # the HDF5 result: stored fields x stored steps + history
     hours: float            # run time at the typical iteration count
@@ -59,7 +59,7 @@ def _grid_elements(deck: Deck) -> float:
 def estimate(deck: Deck) -> Estimate:
     """Steps, elements, equations, memory, output size and run time of one run of `deck`."""
     analysis, control = deck.analysis, deck.loads.control
-    n_control = math.ceil(control.target / control.increment - 1e-9)
+    n_control = _count(control.target / control.increment - 1e-9)
     n_preload = analysis.preload_increments if deck.loads.preload is not None else 0
     n_steps = n_control + n_preload
     n_el = _grid_elements(deck)
@@ -78,15 +78,21 @@ def estimate(deck: Deck) -> Estimate:
     step_bytes = BYTES_PER_FLOAT * (2 * n_nodes * ("displacement" in fields)
                                     + n_qp * sum(GAUSS_COMPONENTS[f] for f in fields
                                                  if f in GAUSS_COMPONENTS))
-    n_stored = math.ceil(n_steps / deck.outputs.every)
+    n_stored = n_steps / deck.outputs.every
     output = step_bytes * n_stored + BYTES_PER_FLOAT * 24 * n_steps + 64.0 * n_nodes
     its = NONLINEAR_ITERATIONS_PER_STEP if analysis.solver == "nonlinear" else 1
     # seconds per iteration: Python overhead, element loops (vectorized), sparse factorization
     per_iteration = 0.02 + 1.5e-4 * n_el + 1e-8 * n_eq ** 1.5
     hours = n_steps * its * per_iteration / 3600.0
     return Estimate(n_steps=n_steps, n_steps_with_cuts=n_preload + n_control * 2 **
-                    analysis.max_step_cuts, n_elements=round(n_el), n_equations=round(n_eq),
+                    analysis.max_step_cuts, n_elements=_count(n_el), n_equations=_count(n_eq),
                     memory_bytes=memory, output_bytes=output, hours=hours)
+
+
+def _count(value: float) -> int | float:
+    """ceil(value), kept a float where it is beyond any int a run could reach (an absurd
+    element size or increment gives 1e300 or inf)."""
+    return math.ceil(value) if value < 1e18 else float(value)
 
 
 def available_memory() -> float | None:

@@ -20,6 +20,8 @@ RUNAWAY = {
     "increment-1e-9": ("loads.control.increment=1.0e-9", "steps"),
     "target-1e9": ("loads.control.target=1.0e9", "steps"),
     "element-size-0.6": ("analysis.element_size=0.6", "elements"),
+    "element-size-1e-300": ("analysis.element_size=1e-300", "elements"),  # inf elements
+    "increment-1e-320": ("loads.control.increment=1e-320", "steps"),  # inf steps
 }
 
 
