@@ -29,6 +29,9 @@ HOURS_WARNING = 1.0
 NONLINEAR_ITERATIONS_PER_STEP = 30
 """Typical equilibrium iterations per step of the nonlinear solver (CF-4 to 40 mm: 10-80)."""
 BYTES_PER_FLOAT = 8
+PROCESS_BYTES = 3e8
+"""The process itself with NumPy, SciPy and numba loaded (peak RSS of the shipped CF-4 run to
+40 mm: 294 MB, nearly all of it this)."""
 GAUSS_COMPONENTS = {"stress": 4, "strain": 4, "state": 8}  # state: 6 int8 flags + 2 floats
 NODES_PER_ELEMENT = {"quad8": 3.0, "quad4": 1.0}  # structured grid, interior share per element
 DOFS_PER_ELEMENT = {"quad8": 16, "quad4": 8}
@@ -73,11 +76,12 @@ def estimate(deck: Deck) -> Estimate:
     factors = 12.0 * 16 * n_eq * math.log2(max(n_eq, 2.0))
     gauss_state = BYTES_PER_FLOAT * 60 * n_qp * 3  # committed, trial, iteration copies
     per_step = BYTES_PER_FLOAT * 24 * n_steps      # history columns (the linear path too)
-    memory = matrix + factors + gauss_state + per_step
     fields = set(deck.outputs.fields)
     step_bytes = BYTES_PER_FLOAT * (2 * n_nodes * ("displacement" in fields)
                                     + n_qp * sum(GAUSS_COMPONENTS[f] for f in fields
                                                  if f in GAUSS_COMPONENTS))
+    memory = (PROCESS_BYTES + matrix + factors + gauss_state + per_step
+              + 2 * step_bytes)  # a step's fields in flight
     n_stored = n_steps / deck.outputs.every
     output = step_bytes * n_stored + BYTES_PER_FLOAT * 24 * n_steps + 64.0 * n_nodes
     its = NONLINEAR_ITERATIONS_PER_STEP if analysis.solver == "nonlinear" else 1
