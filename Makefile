@@ -15,8 +15,10 @@ $(STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[dev]"
 	touch $(STAMP)
 
-run: $(STAMP)  ## run the CF-4 deck (or DECK=...)
-	$(BIN)/icewall run $(DECK)
+RUN_FIELDS ?= [displacement, stress, strain, state]
+
+run: $(STAMP)  ## run the CF-4 deck (or DECK=...), storing the state fields the crack plots need
+	$(BIN)/icewall run $(DECK) --set 'outputs.fields=$(RUN_FIELDS)'
 
 test: $(STAMP)  ## the default test suite (fast; no long validation runs)
 	$(BIN)/python -m pytest -q -m "not slow"

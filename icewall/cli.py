@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import errno
 import functools
 import json
+import os
 import sys
 from pathlib import Path
 
 import click
 
 from icewall import __version__
+from icewall.environment import check_environment
 from icewall.errors import IcewallError, Interrupted
 
 SET_HELP = "Override a deck value, e.g. --set materials.concrete.fc=40 (repeatable)."
@@ -33,15 +36,54 @@ def _handle_errors(func):
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, _raise_interrupted)
         try:
+            check_environment()
             return func(*args, **kwargs)
         except IcewallError as exc:
-            click.echo(f"error: {exc}", err=True)
-            sys.exit(exc.exit_code)
+            _fail(str(exc), exc.exit_code)
         except KeyboardInterrupt:
-            click.echo("interrupted", err=True)
-            sys.exit(130)
+            _fail("interrupted", 130, prefix="")
+        except OSError as exc:  # a file or folder that cannot be read or written
+            where = f"{exc.filename}: " if exc.filename else ""
+            _fail(f"{where}{exc.strerror or exc}", 2 if exc.errno in _BAD_PATH_ERRNOS else 1)
+        except (click.exceptions.ClickException, click.exceptions.Exit, click.Abort):
+            raise  # click's own usage errors and exits
+        except Exception as exc:  # noqa: BLE001 - the promise: no traceback, ever
+            if os.environ.get("ICEWALL_TRACEBACK", "") == "1":
+                raise
+            text = " ".join(str(exc).split())[:200]
+            _fail(f"internal error ({type(exc).__name__}: {text}); please report it "
+                  "(ICEWALL_TRACEBACK=1 shows where)", 1)
 
     return wrapper
+
+
+_BAD_PATH_ERRNOS = {errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.EACCES, errno.EPERM,
+                    errno.EEXIST, errno.EROFS, errno.ENAMETOOLONG, errno.ELOOP, errno.EINVAL}
+
+
+def _fail(message: str, exit_code: int, prefix: str = "error: ") -> None:
+    """One line on stderr, then exit."""
+    click.echo(prefix + " ".join(message.split()), err=True)
+    sys.exit(exit_code)
+
+
+def _warn_resources(loaded, output_dir: str | None = None) -> None:
+    """Warn (stderr) about a long run; refuse (exit 2) a result larger than the free disk of
+    `output_dir` [default outputs.directory] unless analysis.allow_large."""
+    from icewall.deck.resources import estimate, output_refusal, warnings_for
+    from icewall.errors import DeckError
+
+    deck = loaded.deck
+    est = estimate(deck)
+    for warning in warnings_for(deck, est):
+        click.echo(f"warning: {loaded.path}: {warning}", err=True)
+    problem = output_refusal(deck, output_dir or deck.outputs.directory, est)
+    if problem and deck.analysis.allow_large:
+        click.echo(f"warning: {loaded.path}: {problem} (allowed by analysis.allow_large)",
+                   err=True)
+    elif problem:
+        raise DeckError(f"{problem} (analysis.allow_large: true runs it anyway)", loaded.path,
+                        loaded.line_of("outputs.fields"), "outputs.fields")
 
 
 @click.group()
@@ -71,6 +113,7 @@ def check(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
     from icewall.deck.load import load_deck
 
     loaded = load_deck(deck, overrides)
+    _warn_resources(loaded)
     if as_json:
         click.echo(json.dumps(asdict(loaded.deck), indent=2))
     else:
@@ -89,12 +132,16 @@ def mesh(deck: str, overrides: tuple[str, ...], out_dir: str, formats: str) -> N
     """Mesh DECK, write the mesh files and print counts and Gauss-point spacing h_c."""
     from icewall.deck.load import load_deck
     from icewall.mesh.build import build_mesh
-    from icewall.mesh.io import mesh_report, write_mesh
+    from icewall.mesh.io import FORMATS, mesh_report, write_mesh
 
+    chosen = [f.strip() for f in formats.split(",") if f.strip()]
+    if unknown := [f for f in chosen if f not in FORMATS] or ([] if chosen else ["(none)"]):
+        raise click.BadParameter(f"unknown mesh format(s) {', '.join(unknown)}; choose from "
+                                 f"{', '.join(FORMATS)}", param_hint="--format")
     loaded = load_deck(deck, overrides)
     the_mesh = build_mesh(loaded.deck)
     stem = Path(out_dir) / Path(deck).stem
-    for path in write_mesh(the_mesh, stem, [f.strip() for f in formats.split(",") if f.strip()]):
+    for path in write_mesh(the_mesh, stem, chosen):
         click.echo(f"wrote {path}")
     click.echo(mesh_report(the_mesh, loaded.deck.analysis.gauss))
 
@@ -116,6 +163,8 @@ def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool,
     from icewall.pipeline import run_deck
 
     loaded = load_deck(deck, overrides)
+    _warn_resources(loaded, None if output is None else
+                    str(Path(output).parent if output.endswith(".h5") else output))
     report = run_deck(loaded, output, progress=None if quiet else click.echo, resume=resume)
     if not quiet:
         t = report.timings
@@ -222,16 +271,19 @@ def params(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
 
 
 @main.command()
-@click.option("--fc", type=float, required=True, help="Uniaxial compressive strength f'c (MPa).")
-@click.option("--h-c", "h_c", type=float, default=100.0, show_default=True,
+@click.option("--fc", type=click.FloatRange(0.0, 1000.0, min_open=True), required=True,
+              help="Uniaxial compressive strength f'c (MPa).")
+@click.option("--h-c", "h_c", type=click.FloatRange(0.0, 1e5, min_open=True), default=100.0,
+              show_default=True,
               help="Crack-band width h_c (mm) for k_t, k_c (eqs. 3.29, 3.34).")
 @click.option("--path", "path", default="uniaxial-compression", show_default=True,
               help="uniaxial-compression | uniaxial-tension | biaxial:R | biaxial-tension:R | "
                    "biaxial-strain:R | pure-shear | rotating")
 @click.option("--formulation", default="plane_stress", show_default=True,
               type=click.Choice(["plane_stress", "plane_strain", "axisymmetric"]))
-@click.option("--steps", type=click.IntRange(1), default=400, show_default=True)
-@click.option("--max-strain", type=float, default=0.006, show_default=True,
+@click.option("--steps", type=click.IntRange(1, 1_000_000), default=400, show_default=True)
+@click.option("--max-strain", type=click.FloatRange(0.0, 1.0, min_open=True), default=0.006,
+              show_default=True,
               help="Final control strain magnitude.")
 @click.option("--unload-at", type=float, multiple=True,
               help="Control strain at which to unload to zero and reload (repeatable).")
@@ -253,8 +305,8 @@ def point(fc: float, h_c: float, path: str, formulation: str, steps: int, max_st
         params = derive_concrete_parameters(fc, h_c)
         result = run_path(path, params, formulation, n_steps=steps, max_strain=max_strain,
                           unload_at=unload_at, trial_stress=trial_stress)
-    except ValueError as exc:
-        raise click.BadParameter(str(exc)) from None
+    except (ValueError, ArithmeticError) as exc:
+        raise click.BadParameter(str(exc) or type(exc).__name__) from None
     if csv_path == "-":
         result.to_csv(sys.stdout)
     elif csv_path:
@@ -270,6 +322,7 @@ def point(fc: float, h_c: float, path: str, formulation: str, steps: int, max_st
 @main.command()
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Write to a file instead of standard output.")
+@_handle_errors
 def schema(output: str | None) -> None:
     """Print the JSON Schema of the deck format (for editors)."""
     from icewall.deck.jsonschema import deck_json_schema

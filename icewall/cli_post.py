@@ -28,7 +28,9 @@ def _deflections(text: str) -> list[float | str]:
 
 
 def _step_figures(path: str, kinds: list[str], where: float | str, scale: float | None):
-    """(stem suffix, figure) of every step plot asked for, one result file, one deflection."""
+    """(stem suffix, figure or the ResultError that kept it from being drawn) of every step
+    plot asked for, one result file, one deflection: a kind whose fields are missing does not
+    stop the others."""
     from icewall.post.common import step_at
     from icewall.post.deformed import plot_deformed
     from icewall.post.interface_map import plot_interface_map
@@ -45,7 +47,10 @@ def _step_figures(path: str, kinds: list[str], where: float | str, scale: float 
         step = step_at(r, where)
         for kind in kinds:
             if kind in builders:
-                yield f"{kind}_{label}", builders[kind](r, step)
+                try:
+                    yield f"{kind}_{label}", builders[kind](r, step)
+                except ResultError as exc:
+                    yield f"{kind}_{label}", exc
 
 
 @click.command()
@@ -70,7 +75,8 @@ def plot(results: tuple[str, ...], kinds: str, at: str, scale: float | None, out
     from icewall.post.curves import plot_curves
     from icewall.post.figures import save
 
-    chosen = list(PLOTS) if kinds.strip() == "all" else [k.strip() for k in kinds.split(",")]
+    everything = kinds.strip() == "all"
+    chosen = list(PLOTS) if everything else [k.strip() for k in kinds.split(",")]
     unknown = [k for k in chosen if k not in PLOTS]
     if unknown or not chosen:
         raise click.BadParameter(f"unknown plot(s) {unknown}; choose from {', '.join(PLOTS)} "
@@ -83,17 +89,22 @@ def plot(results: tuple[str, ...], kinds: str, at: str, scale: float | None, out
     if "curves" in chosen:
         written += save(plot_curves(list(results), list(labels) or None),
                         Path(outdir) / "curves", fmts)
-    points, problems = _deflections(at), []
+    points, problems, skipped = _deflections(at), [], []
     for path in results:
         stem = Path(path).name.removesuffix(".partial").removesuffix(".h5")
         for where in points:
             try:
                 for suffix, fig in _step_figures(path, chosen, where, scale):
-                    written += save(fig, Path(outdir) / f"{stem}_{suffix}", fmts)
+                    if isinstance(fig, ResultError):  # -k all: skip what cannot be drawn
+                        (skipped if everything else problems).append(f"{suffix}: {fig}")
+                    else:
+                        written += save(fig, Path(outdir) / f"{stem}_{suffix}", fmts)
             except ResultError as exc:
                 problems.append(str(exc))
     for p in written:
         click.echo(f"wrote {p}")
+    for message in skipped:
+        click.echo(f"skipped {message}", err=True)
     if problems:  # one line each, after what could be drawn
         for message in problems:
             click.echo(f"error: {message}", err=True)

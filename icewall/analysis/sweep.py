@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import os
 import re
 import time
@@ -81,12 +82,13 @@ def _yaml_text(value) -> str:
 
 
 def _read_sweep_file(path: str | Path) -> tuple[list[str], dict, dict]:
+    from icewall.deck.yamlsrc import load_yaml
+
     try:
-        data = yaml.safe_load(Path(path).read_text()) or {}
-    except OSError as exc:
-        raise DeckError(f"cannot read the sweep file: {exc.strerror}", str(path)) from None
-    except yaml.YAMLError as exc:
-        raise DeckError(f"YAML syntax error: {exc}", str(path)) from None
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DeckError(f"cannot read the sweep file: {exc}", str(path)) from None
+    data = load_yaml(text, str(path)) or {}  # the deck reader's YAML: one-line errors
     if not isinstance(data, dict) or set(data) - {"decks", "vary", "fixed"}:
         raise DeckError("a sweep file is a mapping of decks, vary, fixed", str(path))
     base = Path(path).parent
@@ -138,6 +140,7 @@ def expand_jobs(decks: Iterable[str | Path] = (), sets: Iterable[str] = (),
             vary[key] = values
     if not deck_list:
         raise DeckError("no decks to run", where)
+    check_run_count(len(deck_list) * math.prod(len(vs) for vs in vary.values()), fixed, where)
     fixed_over = tuple(f"{k}={v}" for k, v in fixed.items())
     jobs: dict[str, Job] = {}
     for deck in deck_list:
@@ -150,6 +153,17 @@ def expand_jobs(decks: Iterable[str | Path] = (), sets: Iterable[str] = (),
                                 f"({jobs[name].deck}, {deck}): rename one deck", where)
             jobs[name] = job
     return list(jobs.values())
+
+
+def check_run_count(n_runs: int, fixed: dict, where: str) -> None:
+    """Refuse more than resources.MAX_RUNS runs up front (before any job is listed) unless
+    the sweep fixes analysis.allow_large to true."""
+    from icewall.deck.resources import MAX_RUNS
+
+    allowed = str(fixed.get("analysis.allow_large", "false")).strip().lower() == "true"
+    if n_runs > MAX_RUNS and not allowed:
+        raise DeckError(f"{n_runs:.3g} runs (limit {MAX_RUNS:.0e}): the sweep would not finish; "
+                        "--set analysis.allow_large=true runs it anyway", where)
 
 
 PERTURBATION = 1e-8
@@ -174,6 +188,8 @@ def with_realizations(jobs: list[Job], realizations: int) -> list[Job]:
     branch, as on another machine or NumPy build. Named `<run>.r<k>`, beside the run."""
     if realizations <= 1:
         return list(jobs)
+    fixed = dict(o.split("=", 1) for job in jobs[:1] for o in job.overrides if "=" in o)
+    check_run_count(len(jobs) * realizations, fixed, "icewall sweep --realizations")
     from icewall.deck.load import load_deck
 
     out = []

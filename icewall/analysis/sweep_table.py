@@ -3,8 +3,10 @@
 A ratio is reference / ours (test/predicted, as in the thesis' Table 5.1), against the test and
 against the thesis' FEA, for the ultimate (peak) load and the residual load at 40 mm, both as
 icewall.analysis.extract defines them (`peaked` is "no" where the load had not dropped by the
-end of the run: the peak is then a lower bound). Reference values come from
-icewall.analysis.reference where it knows the specimen, else from the deck's
+end of the run: the peak is then a lower bound). A run that never peaked (still rising at its
+end, or a linear-elastic run) gets no ratio and stays out of the mean and CoV: its largest load
+is no prediction of the ultimate load, nor its load at 40 mm of the residual. Reference values
+come from icewall.analysis.reference where it knows the specimen, else from the deck's
 `specimen.reference`. Ductility per CSA S474 clause 8.4.4 (icewall.post.ductility): the
 ratio mu reached, pass / fail / undecided, and the energy absorbed (area under the total jack
 load - control deflection curve, N mm). Below the rows: the mean and the coefficient of
@@ -112,8 +114,9 @@ def build_rows(jobs, results: dict[str, dict]) -> list[dict]:
                 measures = {"reason": f"unreadable result: {exc}"}
             row.update({k: v for k, v in measures.items() if row.get(k) is None})
         refs, ref_unit = _references(job, row["specimen"])
-        for column, (field, measure) in RATIOS.items():
-            row[column] = _ratio(refs.get(field), row[measure], ref_unit, row["unit"])
+        for column, (field, measure) in RATIOS.items():  # a ratio needs a peak (module doc)
+            row[column] = (_ratio(refs.get(field), row[measure], ref_unit, row["unit"])
+                           if row["peaked"] == "yes" else None)
         rows.append(row)
     return rows
 

@@ -11,7 +11,7 @@ import typing
 from dataclasses import MISSING
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
-from icewall.deck.yamlsrc import LineDict, LineList
+from icewall.deck.yamlsrc import LineDict, LineList, short_repr
 from icewall.errors import DeckError
 
 REQUIRED = MISSING
@@ -77,47 +77,54 @@ def _convert(value: Any, tp: Any, meta: dict, ctx: Context, line: int | None, pa
     origin = get_origin(tp)
     if dataclasses.is_dataclass(tp):
         if not isinstance(value, dict):
-            raise ctx.error(f"expected a mapping, got {value!r}", line, path)
+            raise ctx.error(f"expected a mapping, got {short_repr(value)}", line, path)
         return build(tp, value, ctx, path)
     if origin in (list, tuple):
         if not isinstance(value, list):
-            raise ctx.error(f"expected a list, got {value!r}", line, path)
+            raise ctx.error(f"expected a list, got {short_repr(value)}", line, path)
         (item_tp, *_) = get_args(tp)
         lines = value.line_of if isinstance(value, LineList) else (lambda i: line)
         return tuple(_convert(v, item_tp, meta, ctx, lines(i), f"{path}[{i}]")
                      for i, v in enumerate(value))
     if tp is bool:
         if not isinstance(value, bool):
-            raise ctx.error(f"expected true or false, got {value!r}", line, path)
+            raise ctx.error(f"expected true or false, got {short_repr(value)}", line, path)
         return value
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ctx.error(f"expected a number, got {value!r}", line, path)
-        value = float(value)
+            raise ctx.error(f"expected a number, got {short_repr(value)}", line, path)
+        try:
+            value = float(value)
+        except OverflowError:  # an integer with hundreds of digits
+            raise ctx.error(f"{short_repr(value, 20)} is too large for a number", line,
+                            path) from None
         if value != value or value in (float("inf"), float("-inf")):
             raise ctx.error("expected a finite number", line, path)
     elif tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ctx.error(f"expected an integer, got {value!r}", line, path)
+            raise ctx.error(f"expected an integer, got {short_repr(value)}", line, path)
     elif tp is str:
         if not isinstance(value, str):
-            raise ctx.error(f"expected a string, got {value!r}", line, path)
+            raise ctx.error(f"expected a string, got {short_repr(value)}", line, path)
+        if "\x00" in value:
+            raise ctx.error("a NUL character is not allowed in a string", line, path)
     _check_limits(value, meta, ctx, line, path)
     return value
 
 
 def _check_limits(value: Any, meta: dict, ctx: Context, line: int | None, path: str) -> None:
     unit = f" {meta['unit']}" if meta.get("unit") else ""
+    shown = short_repr(value, 24)
     if meta.get("choices") and value not in meta["choices"]:
         allowed = ", ".join(repr(c) for c in meta["choices"])
-        raise ctx.error(f"{value!r} is not one of {allowed}", line, path)
+        raise ctx.error(f"{short_repr(value)} is not one of {allowed}", line, path)
     if meta.get("minimum") is not None and value < meta["minimum"]:
-        raise ctx.error(f"{value}{unit} is below the minimum {meta['minimum']}{unit}", line, path)
+        raise ctx.error(f"{shown}{unit} is below the minimum {meta['minimum']}{unit}", line, path)
     if meta.get("maximum") is not None and value > meta["maximum"]:
-        raise ctx.error(f"{value}{unit} is above the maximum {meta['maximum']}{unit}", line, path)
+        raise ctx.error(f"{shown}{unit} is above the maximum {meta['maximum']}{unit}", line, path)
     low = meta.get("exclusive_minimum")
     if low is not None and value <= low:
-        raise ctx.error(f"{value}{unit} must be greater than {low}{unit}", line, path)
+        raise ctx.error(f"{shown}{unit} must be greater than {low}{unit}", line, path)
 
 
 def build(cls: type, data: dict, ctx: Context, path: str = "") -> Any:

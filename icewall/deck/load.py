@@ -6,12 +6,10 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
-
 from icewall.deck.fields import Context, build
 from icewall.deck.schema import Deck
 from icewall.deck.validate import validate
-from icewall.deck.yamlsrc import LineDict, LineList, parse_yaml, read_yaml
+from icewall.deck.yamlsrc import LineDict, LineList, load_yaml, parse_yaml, read_yaml, short_repr
 from icewall.errors import DeckError
 
 _PATH_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?")
@@ -56,9 +54,10 @@ def apply_override(tree: LineDict, assignment: str, file: str) -> None:
     if not all(_PATH_TOKEN.fullmatch(k) and "[" not in k for k in keys):
         raise DeckError(f"--set: bad key path {key_path!r}", file)
     try:
-        value = yaml.safe_load(raw)
-    except yaml.YAMLError as exc:
-        raise DeckError(f"--set {key_path}: cannot parse value {raw!r}: {exc}", file) from None
+        value = load_yaml(raw, "--set")
+    except DeckError as exc:
+        raise DeckError(f"--set {key_path}: cannot parse value {short_repr(raw)}: {exc.detail}",
+                        file) from None
     node = tree
     for key in keys[:-1]:
         child = node.get(key)

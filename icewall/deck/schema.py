@@ -324,6 +324,10 @@ class Analysis:
                                    choices=("every_iteration", "every_step"))
     preload_increments: int = option(5, doc="load-control increments of the in-plane preload",
                                      minimum=1)
+    allow_large: bool = option(False, doc="run a deck that icewall check estimates cannot "
+                               "finish on this machine (over 1e5 steps, over 2e5 elements, more "
+                               "memory than available, more output than free disk); each limit "
+                               "passed is then a warning")
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from icewall.deck.resources import refusals
 from icewall.deck.schema import Deck
 
 ErrorFactory = Callable[[str, str], Exception]
-MAX_ELEMENTS = 2_000_000
 
 
 def _spans_overlap(items: list[tuple[float, float, str]], what: str, fail: ErrorFactory) -> None:
@@ -29,6 +29,7 @@ def _mirrored(x: float, half_width: float, key: str) -> list[tuple[float, float,
 def validate(deck: Deck, fail: ErrorFactory) -> None:
     """Raise fail(message, key_path) for the first impossible combination found."""
     geo, loads, analysis = deck.geometry, deck.loads, deck.analysis
+    _check_name(deck.specimen.name, fail)
     half = geo.half_length
     inner = half - geo.end_plate
     if geo.top_plate + geo.bottom_plate >= geo.depth:
@@ -90,6 +91,7 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
         raise fail(f"control point x = {loads.control.x:g} mm is off the wall", "loads.control.x")
     if loads.control.increment > loads.control.target:
         raise fail("increment is larger than the target", "loads.control.increment")
+    _check_preload(deck, fail)
     if loads.measure.kind == "intensity" and loads.measure.tributary_length is None:
         raise fail("kind 'intensity' needs tributary_length (the jack spacing)",
                    "loads.measure.tributary_length")
@@ -109,9 +111,36 @@ def _check_mesh_size(deck: Deck, fail: ErrorFactory) -> None:
     if size > geo.depth:
         raise fail(f"element size {size:g} mm exceeds the wall depth {geo.depth:g} mm; "
                    "the core would have no interior", "analysis.element_size")
-    length = geo.half_length * (1 if geo.model == "half" else 2)
-    height = geo.depth + max([leg.height for leg in geo.legs], default=0.0)
-    estimate = (length / size + 1) * (height / size + 1)
-    if estimate > MAX_ELEMENTS:
-        raise fail(f"element size {size:g} mm gives about {estimate:.3g} elements "
-                   f"(limit {MAX_ELEMENTS:.0e}); is the unit mm?", "analysis.element_size")
+    if not deck.analysis.allow_large:  # icewall.deck.resources: cannot finish here
+        for message, key in refusals(deck):
+            raise fail(f"{message} (analysis.allow_large: true runs it anyway)", key)
+
+
+def _check_name(name: str, fail: ErrorFactory) -> None:
+    """The specimen name also names the result file: no control characters."""
+    bad = sorted({c for c in name if ord(c) < 32 or ord(c) == 127})
+    if bad:
+        raise fail(f"control character(s) {', '.join(repr(c) for c in bad)} in the name "
+                   "(it names the result file)", "specimen.name")
+
+
+def _check_preload(deck: Deck, fail: ErrorFactory) -> None:
+    """A preload the section cannot hold: beyond its squash load f'c A_c + f_y A_s in
+    compression, or its yield load f_y A_s + f't A_c in tension (plates and core over the
+    width b). No equilibrium exists there, so the preload stage could never converge; a value
+    beyond them is a unit slip (kN for N) or a typo, not an analysis."""
+    if deck.loads.preload is None:
+        return
+    geo, concrete, steel = deck.geometry, deck.materials.concrete, deck.materials.steel
+    area_steel = geo.width * (geo.top_plate + geo.bottom_plate)
+    area_core = geo.width * (geo.depth - geo.top_plate - geo.bottom_plate)
+    f_t = concrete.ft if concrete.ft is not None else 0.33 * concrete.fc ** 0.5  # eq. 4.2
+    force = deck.loads.preload.axial_force
+    if force < 0:
+        limit, what = concrete.fc * area_core + steel.fy * area_steel, "squash load"
+    else:
+        limit, what = steel.fy * area_steel + f_t * area_core, "tensile yield load"
+    if abs(force) > limit:
+        raise fail(f"{force:.4g} N is beyond the section's {what} {limit:.4g} N "
+                   f"(f'c = {concrete.fc:g}, f_y = {steel.fy:g} MPa, b = {geo.width:g} mm); "
+                   "is the unit N?", "loads.preload.axial_force")

@@ -143,7 +143,8 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
     coaxial = deck.analysis.concrete_stiffness == "secant-coaxial"
 
     own_moduli = not tangent and (floor > 0.0 or coaxial)  # built here from the trial state
-    # $ICEWALL_CONCRETE_KERNEL: the same update and moduli compiled (the tangent stays NumPy)
+    # $ICEWALL_CONCRETE_KERNEL: the same update and moduli compiled (the deck's differenced
+    # `tangent` stays NumPy; law(..., tangent=True) differentiates the compiled update)
     kernel = choose_kernel(formulation, trial_kind) if own_moduli else "numpy"
 
     def compiled_update(strain, state, p, formulation, trial_stress, with_moduli=False):

@@ -87,11 +87,11 @@ def export_vtu_series(result_path: str | Path, out: str | Path | None = None
     if out.suffix != ".pvd":
         raise ResultError(f"export writes a .pvd collection (with a folder of .vtu), not {out}")
     folder = out.with_suffix("")
-    folder.mkdir(parents=True, exist_ok=True)
-    with open_result(result_path) as r:
+    with open_result(result_path) as r:  # a bad result file leaves no folder behind
         mesh, h = r.mesh, r.history
         if not r.steps:
             raise ResultError(f"{result_path}: no step stores fields; nothing to export")
+        folder.mkdir(parents=True, exist_ok=True)
         row = {int(s): i for i, s in enumerate(h["step"])}
         defl = np.array([h["control_displacement"][row[s]] for s in r.steps])
         by_deflection = bool(np.all(np.diff(defl) > 0))

@@ -13,6 +13,7 @@ from pathlib import Path
 from icewall import __version__
 from icewall.errors import ResultError
 from icewall.results.reader import open_result
+from icewall.results.summary import LINEAR_NOTE, solver_label
 
 RESIDUAL_AT = 40.0  # mm
 PATTERNS_AT = ("peak", RESIDUAL_AT)
@@ -21,7 +22,7 @@ table{border-collapse:collapse;font-size:14px}td,th{border:1px solid #bbb;paddin
 td.num{text-align:right}tr.stat td{font-style:italic;background:#f4f4f4}
 .pass{color:#060}.fail{color:#b00}.undecided{color:#a60}img{max-width:100%}
 figure{margin:1em 0}figcaption{font-size:13px;color:#555}"""
-COLUMNS = (("name", "run"), ("specimen", "specimen"), ("status", "status"),
+COLUMNS = (("name", "run"), ("specimen", "specimen"), ("solver", "solver"), ("status", "status"),
            ("peak", "peak"), ("ultimate_test", "test peak"), ("ult_ratio", "test/pred peak"),
            ("residual_40", "load at 40 mm"), ("residual_test", "test residual"),
            ("res_ratio", "test/pred residual"), ("mu", "ductility ratio"),
@@ -41,10 +42,13 @@ def validation_row(path: str | Path) -> dict:
 
     with open_result(path) as r:
         attrs, deck_text = dict(r.attrs), r.deck_text
-        ductility = result_ductility(r)
+        linear = attrs.get("solver") == "linear"
+        ductility = ({"verdict": None, "message": f"not assessed: {LINEAR_NOTE}"} if linear
+                     else result_ductility(r))
     fig = extract(str(path), residual_deflection=RESIDUAL_AT)
     ref = reference_loads(attrs, deck_text, str(path))
     row = {"name": run_name(path), "specimen": attrs.get("specimen"),
+           "solver": solver_label(attrs.get("solver")),
            "status": attrs.get("status"), "unit": attrs.get("load_unit") or "",
            "peak": fig.get("peak_load"), "residual_40": fig.get("residual_load_40"),
            "ultimate_test": ref.get("ultimate_test"), "residual_test": ref.get("residual_test"),
@@ -52,7 +56,9 @@ def validation_row(path: str | Path) -> dict:
            "energy_Nmm": ductility.get("energy_Nmm"), "ductility": ductility}
     for key, test, ours in (("ult_ratio", "ultimate_test", "peak"),
                             ("res_ratio", "residual_test", "residual_40")):
-        row[key] = row[test] / row[ours] if row[test] is not None and row[ours] else None
+        # a ratio needs a nonlinear run that peaked (icewall.analysis.sweep_table)
+        usable = not linear and fig.get("peaked") and row[test] is not None and row[ours]
+        row[key] = row[test] / row[ours] if usable else None
     return row
 
 
@@ -131,8 +137,9 @@ def _ductility_html(rows: list[dict]) -> str:
             detail = (f" (P_y = {d['yield_load']:.4g} {r['unit']}, K0 = "
                       f"{d['initial_stiffness']:.4g} {r['unit']}/mm, d_y = "
                       f"{d['yield_deflection']:.3g} mm)")
-        items.append(f'<li><b>{html.escape(r["name"])}</b>: <span class="{d["verdict"]}">'
-                     f'{d["verdict"]}</span>: {html.escape(d["message"] + detail)}</li>')
+        verdict = d.get("verdict") or "not assessed"
+        items.append(f'<li><b>{html.escape(r["name"])}</b>: <span class="{verdict}">'
+                     f'{verdict}</span>: {html.escape(d["message"] + detail)}</li>')
     return "<ul>" + "".join(items) + "</ul>"
 
 
@@ -148,7 +155,8 @@ def build_report(paths: list[str | Path], out: str | Path, title: str | None = N
              f"<p>icewall {__version__}, {datetime.now().astimezone():%Y-%m-%d %H:%M %Z}. "
              "Loads in each run's load measure; ratios are test / predicted; the residual is "
              f"the load at {RESIDUAL_AT:g} mm deflection; ductility per CSA S474 clause 8.4.4 "
-             "(six times the yield deflection at 50 % of the yield load).</p>",
+             "(six times the yield deflection at 50 % of the yield load). A run gets a ratio "
+             f"only if it peaked; a linear-solver result is {LINEAR_NOTE}.</p>",
              "<h2>Validation table</h2>", table_html(rows),
              "<h2>Ductility (CSA S474, 8.4.4)</h2>", _ductility_html(rows),
              "<h2>Load-deflection curves against the tests</h2>"]

@@ -9,7 +9,7 @@ import numpy as np
 
 from icewall.errors import ResultError
 from icewall.mesh.mesh import Mesh, Region
-from icewall.results.writer import FORMAT, FORMAT_VERSION, PARTIAL_SUFFIX
+from icewall.results.writer import CORE_COLUMNS, FORMAT, FORMAT_VERSION, PARTIAL_SUFFIX
 
 SUPPORTED_VERSIONS = (1,)
 
@@ -34,6 +34,27 @@ def _open(path: str) -> h5py.File:
         if "locking" not in str(exc):
             raise
         return h5py.File(path, "r")
+
+
+def _checked_n_steps(path: str, attrs: dict, history: h5py.Group) -> int:
+    """The n_steps attribute, checked against the history columns: every core column is there
+    and holds n_steps values (one more is allowed in a file whose run died between appending
+    a step and counting it: status running or failed). A tampered or truncated count would
+    drop or invent steps silently."""
+    n = attrs.get("n_steps", 0)
+    if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+        raise ResultError(f"{path}: corrupt result file, n_steps = {n!r}")
+    if missing := [name for name in CORE_COLUMNS if name not in history]:
+        raise ResultError(f"{path}: corrupt result file, history/{', history/'.join(missing)} "
+                          "missing")
+    slack = 1 if attrs.get("status") in ("running", "failed") else 0
+    for name, ds in history.items():
+        if not isinstance(ds, h5py.Dataset) or ds.ndim != 1:
+            raise ResultError(f"{path}: corrupt result file, history/{name} is not a column")
+        if not n <= len(ds) <= n + slack:
+            raise ResultError(f"{path}: corrupt result file, n_steps = {n} but history/{name} "
+                              f"holds {len(ds)} values")
+    return n
 
 
 class ResultFile:
@@ -63,7 +84,7 @@ class ResultFile:
             for name in ("deck", "mesh", "history", "steps"):
                 if name not in self._f:
                     raise ResultError(f"{self.path}: corrupt result file, /{name} missing")
-            self._n = int(self.attrs.get("n_steps", 0))
+            self._n = _checked_n_steps(self.path, self.attrs, self._f["history"])
             self.history = {k: ds[: self._n] for k, ds in self._f["history"].items()}
             last = int(self.history["step"][-1]) if self._n else 0
             self.steps = sorted(s for s in (int(k) for k in self._f["steps"]) if s <= last)

@@ -9,6 +9,17 @@ import numpy as np
 from icewall.results.reader import open_result
 
 _NO_FINISH = "no finish record: run still going, or killed"
+LINEAR_NOTE = "linear-elastic, not a prediction"
+"""What a linear-solver result is (icewall summary and report say it; no test/predicted ratio,
+no ductility verdict): the initial moduli and tied interfaces, no cracking, crushing or
+yielding, so its loads grow without bound."""
+
+
+def solver_label(solver: str | None) -> str:
+    """The solver of a result as summary and report print it."""
+    if solver == "linear":
+        return f"linear ({LINEAR_NOTE})"
+    return solver or "unknown (not recorded in the file)"
 
 
 def summarize(path: str | os.PathLike) -> dict:
@@ -17,13 +28,17 @@ def summarize(path: str | os.PathLike) -> dict:
 
     with open_result(path) as r:
         a, h = r.attrs, r.history
-        ductility = result_ductility(r) if len(h["step"]) else None
+        solver = a.get("solver")
+        ductility = result_ductility(r) if len(h["step"]) and solver != "linear" else None
+    if solver == "linear":
+        ductility = {"message": f"not assessed: {LINEAR_NOTE}"}
     status = str(a.get("status", ""))
     reason = str(a.get("stop_reason", ""))
     if status == "running" and not reason:
         reason = _NO_FINISH
     out = {
-        "path": os.fspath(path), "specimen": a.get("specimen"), "status": status,
+        "path": os.fspath(path), "specimen": a.get("specimen"), "solver": solver,
+        "status": status,
         "stop_reason": reason, "n_steps": int(len(h["step"])),
         "max_load": None, "deflection_at_max_load": None, "final_load": None,
         "final_deflection": None, "total_iterations": 0, "iterations_per_step_median": None,
@@ -86,6 +101,7 @@ def format_summary(summary: dict) -> str:
     rows = [
         ("file", s.get("path") or "-"),
         ("specimen", s.get("specimen") or "-"),
+        ("solver", solver_label(s.get("solver"))),
         ("status", s.get("status") or "-"),
         ("stop reason", s.get("stop_reason") or "-"),
         ("steps", _num(s.get("n_steps"))),

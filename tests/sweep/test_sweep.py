@@ -123,22 +123,17 @@ def test_sweep_table_and_ratios(tmp_path):
     assert set(rows) == {"cf4", "tf1", "vtt3", "mean", "cov"}
     from icewall.analysis.reference import find_reference
 
-    ratios = []
     for name, specimen in (("cf4", "CF-4"), ("tf1", "TF-1"), ("vtt3", "VTT3")):
         row = rows[name]
         assert row["status"] == "completed" and row["specimen"] == specimen
         assert (tmp_path / f"{name}.h5").exists()
         ref = find_reference(specimen)
-        assert row["unit"] == ref.unit
-        assert float(row["ult_test/pred"]) == pytest.approx(ref.ultimate_test
-                                                            / float(row["peak"]))
+        assert row["unit"] == ref.unit and float(row["peak"]) > 0
         assert row["residual_40"] == ""  # never reached 40 mm
-        ratios.append(float(row["ult_test/pred"]))
-    mean = sum(ratios) / 3
-    assert float(rows["mean"]["ult_test/pred"]) == pytest.approx(mean)
-    sd = (sum((r - mean) ** 2 for r in ratios) / 2) ** 0.5
-    assert float(rows["cov"]["ult_test/pred"]) == pytest.approx(sd / mean)
-    assert rows["mean"]["res_test/pred"] == ""
+        # a linear run never peaks: no ratio (tests/reliability checks the ratios of runs
+        # that did peak, and that only those enter the mean and CoV)
+        assert row["peaked"] == "no" and row["ult_test/pred"] == ""
+    assert rows["mean"]["ult_test/pred"] == rows["mean"]["res_test/pred"] == ""
 
 
 def test_realizations_and_their_bands(tmp_path):
@@ -158,8 +153,8 @@ def test_realizations_and_their_bands(tmp_path):
     assert float(cf4["peak_min"]) == min(peaks) and float(cf4["peak_max"]) == max(peaks)
     assert float(cf4["peak"]) == sorted(peaks)[1]  # the median
     assert cf4["residual_40"] == ""  # a linear run to 2 mm never reaches 40 mm
-    ratios = [float(rows[n]["ult_test/pred"]) for n in ("cf4", "cf4.r1", "cf4.r2")]
-    assert float(cf4["ult_test/pred"]) == pytest.approx(sorted(ratios)[1])
+    assert [rows[n]["ult_test/pred"] for n in ("cf4", "cf4.r1", "cf4.r2")] == [""] * 3
+    assert cf4["ult_test/pred"] == ""  # linear runs never peak: no ratio to take a median of
     assert any(line.startswith("over 3 round-off realizations") for line in lines)
 
 
