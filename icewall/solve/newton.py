@@ -77,12 +77,20 @@ def _trial_gap_force(problem: Problem, multiplier_increment: np.ndarray, eta: fl
     return c.restrict(C.T @ (c.state.lam + eta * multiplier_increment))
 
 
+PREDICTOR_PROBE = 1e-6
+"""The first iteration's tangent is taken this fraction of the last increment ahead."""
+
+
 def newton_increment(problem: Problem, settings: SolverSettings, start: PathState,
-                     control, preload_factor: float, kind: str = "control") -> Increment:
+                     control, preload_factor: float, kind: str = "control",
+                     last_increment: np.ndarray | None = None) -> Increment:
     """Iterate one increment to convergence by Newton-Raphson under `control`
     (icewall.solve.controls: load, displacement or dissipation control; the preload at
     `preload_factor`). Raises StepFailed when it does not converge in
-    `settings.max_iterations`."""
+    `settings.max_iterations`. `last_increment`: the displacements of the last converged
+    increment; the predictor's tangent is taken a PREDICTOR_PROBE of it ahead of the committed
+    state, so that a point that was loading on its envelope predicts with its loading branch
+    (at the committed state itself every point unloads: its secant)."""
     c = problem.constraints
     R = c.restrict(problem.reference_load)
     F_pre = (np.zeros_like(start.u) if problem.preload is None
@@ -108,7 +116,11 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
             return Increment(kind, -float(current.u[problem.control_equation]),
                              current.load_factor, preload_factor, iteration - 1, disp_norm,
                              current.load_norm, current.evaluation, current.u, forensics)
-        du, dP, dm = _newton_direction(problem, current, control)
+        matrix_at = current.evaluation
+        if iteration == 1 and last_increment is not None and _norm(last_increment) > 0.0:
+            matrix_at = problem.structure.evaluate(
+                current.u + PREDICTOR_PROBE * last_increment, start.states, tangent=True)
+        du, dP, dm = _newton_direction(problem, current, control, matrix_at)
         eta, trial = _line_search(problem, start, current, du, dP, dm, F_pre, R,
                                   LINE_SEARCH_RISE if flips else 1.0)
         forensics["line_search"].append(round(math.log2(1.0 / eta)))
@@ -141,12 +153,12 @@ def _count_changes(before, after) -> int:
                    for a, b in zip(before, after, strict=True) if a is not None))
 
 
-def _newton_direction(problem: Problem, current: Iterate, control
+def _newton_direction(problem: Problem, current: Iterate, control, matrix_at
                       ) -> tuple[np.ndarray, float, np.ndarray]:
     """(du, dP, dlam) of a full Newton step: one factorisation of the augmented tangent, two
     solves (reference load and unbalance), the load factor from the control's row."""
     s, c = problem.structure, problem.constraints
-    factor = c.factorize(s.stiffness(current.evaluation))
+    factor = c.factorize(s.stiffness(matrix_at))
     rhs_unbalance = c.unbalance_rhs(current.structural, current.u)
     if isinstance(control, LoadControl):
         du, dm = c.split(factor.solve(rhs_unbalance))

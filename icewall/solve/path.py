@@ -113,6 +113,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         size, release = resume[0], resume[1]
         mode = "dissipation" if resume[2] else "displacement"
     path = _Path(problem, state, preload)
+    last_increment = None
     while -float(state.u[problem.control_equation]) < settings.target - 1e-12 * max(
             1.0, settings.target):
         current = -float(state.u[problem.control_equation])
@@ -125,7 +126,8 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             where = f"control {current:.4g} (releasing {release:.3g} N mm)"
         tic = time.perf_counter()
         try:
-            inc = newton_increment(problem, settings, state, control, preload)
+            inc = newton_increment(problem, settings, state, control, preload,
+                                   last_increment=last_increment)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
             reason = getattr(exc, "reason", "non-convergence")
@@ -158,6 +160,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                                                                      d_deflection))
         else:
             size = steps.after_success(size, inc.iterations)
+        last_increment = inc.u - state.u
         state = _next_state(problem, state, inc, ("control", size, release,
                                                   float(mode == "dissipation")))
         path.state = state
