@@ -99,6 +99,7 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
             and analysis.formulation != "plane_strain"):
         raise fail("plane-stress plates are an option of plane-strain analyses only",
                    "materials.steel.formulation")
+    _check_fixed_points(deck, fail)
     _check_mesh_size(deck, fail)
     if len(set(deck.outputs.fields)) != len(deck.outputs.fields):
         raise fail("a field is listed twice", "outputs.fields")
@@ -115,3 +116,17 @@ def _check_mesh_size(deck: Deck, fail: ErrorFactory) -> None:
     if estimate > MAX_ELEMENTS:
         raise fail(f"element size {size:g} mm gives about {estimate:.3g} elements "
                    f"(limit {MAX_ELEMENTS:.0e}); is the unit mm?", "analysis.element_size")
+
+
+def _check_fixed_points(deck: Deck, fail: ErrorFactory) -> None:
+    from icewall.interface.gap import FIXED_POINT_PLACEMENTS, PLACEMENTS_WIRED
+
+    key = "materials.interface.fixed_point_placement"
+    for i, where in enumerate(deck.materials.interface.fixed_point_placement):
+        if where not in FIXED_POINT_PLACEMENTS:
+            raise fail(f"unknown fixed-point placement {where!r} (one of "
+                       f"{', '.join(FIXED_POINT_PLACEMENTS)})", f"{key}[{i}]")
+        if where not in PLACEMENTS_WIRED:
+            raise fail(f"fixed-point placement {where!r} is not passed to the solver yet "
+                       f"(issue 19 wires it; today: {', '.join(PLACEMENTS_WIRED)})",
+                       f"{key}[{i}]")
