@@ -12,7 +12,12 @@ the lever arm). So at the TEST ultimate P_1 (Table 4.1)
     ratio = c P_1 / ((h - t_f) f_y t_f b)
 
 is a lower bound on the bottom plate's force over its yield force: a layout with ratio >= 1 for
-a wall other than CF-8 contradicts 4.2.1.
+a wall other than CF-8 contradicts 4.2.1. The check has a second side: CF-8's plate did yield
+(4.2.1; 5.3: "the bottom steel plate had yielded significantly"). The force can exceed M / z
+only as far as concrete in compression shortens the lever arm (5.5: the concrete "assists in
+carrying the compressive load" at midspan); a lever arm below LEVER_ARM_MIN (h - t_f), a
+concrete compression block over most of the core, is read as impossible, so a layout with CF-8
+below LEVER_ARM_MIN contradicts 4.2.1 as well.
 
 Run ``python -m icewall.analysis.statics`` for the table over the candidate layouts.
 """
@@ -33,6 +38,7 @@ CF_WALLS = {
               "L": 1250.0, "S1": 300.0, "S2": 333.0},
 }
 YIELDED_AT_ULTIMATE = {"CF-8"}  # 4.2.1: the one wall whose bottom plate yielded before the peak
+LEVER_ARM_MIN = 0.8  # smallest lever arm / (h - t_f) taken as possible (module docstring)
 PATCH_WIDTH = 50.0  # mm, the decks' jack patches (an end station sits flush with the wall end)
 
 
@@ -123,7 +129,8 @@ def plate_force_ratio(c: float, load: float, *, h: float, t_f: float, f_y: float
 
 def candidate_table(walls: dict[str, dict] = CF_WALLS) -> list[dict]:
     """Per layout: c for each span, the ratio of each wall at its test ultimate, and whether
-    4.2.1 rules it out (ratio >= 1 for a wall other than CF-8)."""
+    4.2.1 rules it out: ratio >= 1 for a wall other than CF-8 (``violates_4_2_1``), or CF-8
+    below LEVER_ARM_MIN, its plate unable to yield (``cf8_cannot_yield``)."""
     rows: dict[str, dict] = {}
     for wall, g in walls.items():
         for layout in cf_layouts(g["L"], g["S1"], g["S2"]):
@@ -137,6 +144,8 @@ def candidate_table(walls: dict[str, dict] = CF_WALLS) -> list[dict]:
     for row in rows.values():
         row["violates_4_2_1"] = [w for w, r in row["ratio"].items()
                                  if r >= 1.0 and w not in YIELDED_AT_ULTIMATE]
+        row["cf8_cannot_yield"] = [w for w, r in row["ratio"].items()
+                                   if w in YIELDED_AT_ULTIMATE and r < LEVER_ARM_MIN]
     return list(rows.values())
 
 
@@ -145,11 +154,17 @@ def format_candidate_table(rows: list[dict]) -> str:
     walls = list(rows[0]["ratio"])
     spans = sorted(rows[0]["c"], reverse=True)
     head = (["layout", *(f"c (L={s:g})" for s in spans), *walls, "ruled out by 4.2.1"])
+
+    def verdict(r: dict) -> str:
+        out = [f"{w} >= 1" for w in r["violates_4_2_1"]]
+        out += [f"{w} < {LEVER_ARM_MIN:g}: cannot yield" for w in r["cf8_cannot_yield"]]
+        return ", ".join(out) or "no"
+
     out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         cells = [f"{r['layout']}: {r['description']}", *(f"{r['c'][s]:.1f}" for s in spans),
                  *(f"{r['ratio'][w]:.3f}" for w in walls),
-                 ", ".join(r["violates_4_2_1"]) or "no"]
+                 verdict(r)]
         out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out)
 

@@ -53,8 +53,12 @@ def test_which_layouts_4_2_1_rules_out():
     assert verdict["A"] == ["CF-4", "CF-13"]
     assert verdict["C"] == ["CF-13"]
     assert verdict["D"] == []
-    # CF-8 is the exception of 4.2.1: its ratio never rules a layout out
+    # CF-8 is the exception of 4.2.1: a high ratio never rules a layout out ...
     assert all("CF-8" not in v for v in verdict.values())
+    # ... but a layout under which its plate cannot reach yield does
+    cannot = {row["layout"]: row["cf8_cannot_yield"] for row in candidate_table()}
+    assert cannot["F"] == cannot["G"] == ["CF-8"]
+    assert cannot["D"] == [] and cannot["A"] == []
 
 
 def test_continuity_loads_cancel_the_support_rotation_moment():
