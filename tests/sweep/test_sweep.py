@@ -134,6 +134,10 @@ def test_sweep_table_and_ratios(tmp_path):
                                                             / float(row["peak"]))
         assert row["residual_40"] == ""  # never reached 40 mm
         ratios.append(float(row["ult_test/pred"]))
+    # issue 20 §1 columns; a linear run has no history columns: from the stored stress field
+    cf4 = rows["cf4"]
+    assert 0.0 < float(cf4["plate_mid/fy"]) <= float(cf4["plate_max/fy"])
+    assert cf4["residual_mechanism"].startswith("at 2 mm")
     mean = sum(ratios) / 3
     assert float(rows["mean"]["ult_test/pred"]) == pytest.approx(mean)
     sd = (sum((r - mean) ** 2 for r in ratios) / 2) ** 0.5
