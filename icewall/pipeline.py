@@ -174,7 +174,7 @@ def _write_linear(model, writer: ResultWriter, fields: set[str], say, timings) -
 
 def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings,
                      restart: ResumePoint | None = None) -> tuple[int, str, str]:
-    from icewall.analysis.mechanism import MechanismProbe, crushed_points
+    from icewall.analysis.mechanism import MechanismProbe, crushed_points, yielded_points
     from icewall.errors import ConvergenceError
     from icewall.solve.nonlinear import run_nonlinear
 
@@ -196,8 +196,9 @@ def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings
             if due and "state" in fields:
                 gauss.update(report.state_fields())
             load = inc.load_factor * model.measure_factor
-            mechanism = probe.scalars(ev.stress, crushed_points(
-                report.structure.groups, ev.states, ev.stress.shape[:2]))
+            groups, shape = report.structure.groups, ev.stress.shape[:2]
+            mechanism = probe.scalars(ev.stress, crushed_points(groups, ev.states, shape),
+                                      yielded_points(groups, ev.states, shape))
             writer.write_step(StepRecord(
                 step=n_steps, control_displacement=inc.control_displacement, load=load,
                 load_factor=inc.load_factor, iterations=inc.iterations,

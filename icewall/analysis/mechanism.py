@@ -11,6 +11,10 @@
   (after ``fy_reduction``); in plane strain the plate's sigma_xx at first yield is about
   1.12 f_y (sigma_zz = nu sigma_xx), so a ratio >= 1 is a mean stress at or past f_y, not
   necessarily plastic flow.
+* **Whether the tension plate yielded by the peak** (its Gauss points that have yielded,
+  ``tension_plate_yielded``), next to what the thesis says of the wall: 4.2.1, "The ultimate
+  load for all walls except Specimen CF-8 was reached before the bottom steel plate yielded"
+  (and 5.3 for CF-8's analysis: the bottom plate "had yielded significantly").
 * **Where the first crushing occurs**: the crushed (compressive softening) Gauss points at the
   first step with any: their x range, mean y and the region holding most of them.
 * **Residual mechanism**: the same at the last step (or at 40 mm), with the load as a fraction
@@ -35,6 +39,7 @@ from icewall.post.common import gauss_points_xy, gauss_volumes
 TENSION_PLATE = "bottom_plate"
 PLATE_COLUMNS = ("tension_plate_stress_mid", "tension_plate_stress_max",
                  "tension_plate_stress_max_x")
+YIELD_COLUMN = "tension_plate_yielded"
 CRUSH_COLUMNS = ("crushed_x_min", "crushed_x_max", "crushed_y_mean", "crushed_region")
 RESIDUAL_DEFLECTION = 40.0  # mm
 
@@ -79,22 +84,45 @@ class MechanismProbe:
                 "crushed_y_mean": float(xy[:, 1].mean()),
                 "crushed_region": int(values[np.argmax(counts)])}
 
-    def scalars(self, stress: np.ndarray, crushed: np.ndarray | None) -> dict:
+    def scalars(self, stress: np.ndarray, crushed: np.ndarray | None,
+                yielded: np.ndarray | None = None) -> dict:
+        """History columns of one step; `crushed`, `yielded`: (n_el, n_qp) bool or None."""
         out: dict = dict(self.plate_stress(stress))
         if crushed is not None:
             out.update(self.crushing(crushed))
+        if yielded is not None and self.plate.any():
+            out[YIELD_COLUMN] = int(np.count_nonzero(yielded[self.plate]))
         return out
+
+
+def _points(groups, states, shape: tuple[int, int], model: str, flag: str
+            ) -> np.ndarray | None:
+    mask, found = np.zeros(shape, dtype=bool), False
+    for group, state in zip(groups, states, strict=True):
+        if group.model == model:
+            mask[group.cells] = np.asarray(getattr(state, flag)).reshape(len(group.cells), -1)
+            found = True
+    return mask if found else None
 
 
 def crushed_points(groups, states, shape: tuple[int, int]) -> np.ndarray | None:
     """(n_el, n_qp) bool of the concrete points in compressive softening, from the material
     groups and their states (None without a rotating-crack concrete group)."""
-    mask, found = np.zeros(shape, dtype=bool), False
-    for group, state in zip(groups, states, strict=True):
-        if group.model == "rotating_crack":
-            mask[group.cells] = np.asarray(state.crushed_any).reshape(len(group.cells), -1)
-            found = True
-    return mask if found else None
+    return _points(groups, states, shape, "rotating_crack", "crushed_any")
+
+
+def yielded_points(groups, states, shape: tuple[int, int]) -> np.ndarray | None:
+    """(n_el, n_qp) bool of the steel points that have yielded (None without von Mises steel)."""
+    return _points(groups, states, shape, "von_mises", "yielded")
+
+
+def thesis_plate_statement(specimen: str | None) -> bool | None:
+    """Whether the thesis says the wall's bottom plate had yielded by the ultimate: 4.2.1 for
+    the CF series (all walls but CF-8 had not); None where the text says nothing."""
+    name = (specimen or "").upper().replace(" ", "")
+    if not name.startswith("CF-"):
+        return None
+    return name == "CF-8"
 
 
 # -- the check of a result file -----------------------------------------------------------------
@@ -145,7 +173,7 @@ def mechanism_check(path: str | os.PathLike) -> dict:
     from icewall.results.reader import open_result
 
     with open_result(path) as r:
-        hist, f_y = r.history, _yield_stress(r)
+        hist, f_y, specimen = r.history, _yield_stress(r), r.attrs.get("specimen")
         names = {reg.tag: reg.name for reg in r.mesh.regions}
         control = np.ones(len(hist["step"]), bool)
         if "preload_stage" in hist:
@@ -174,6 +202,7 @@ def mechanism_check(path: str | os.PathLike) -> dict:
         load_end, peak = float(hist["load"][end]), float(np.max(p))
     out.update(_ratios(plate, f_y))
     out["plate_reached_fy_before_peak"] = _reached_fy(hist, rows, i_peak, f_y)
+    out.update(_plate_yield(hist, rows, i_peak, specimen))
     if first is None and "crushed_x_min" not in hist:
         first = _crush_from_fields(path)
     out["first_crushing"] = first
@@ -229,6 +258,27 @@ def _reached_fy(hist: dict, rows: np.ndarray, i_peak: int, f_y: float | None) ->
     return bool(np.nanmax(s) >= f_y) if np.isfinite(s).any() else None
 
 
+def _plate_yield(hist: dict, rows: np.ndarray, i_peak: int, specimen: str | None) -> dict:
+    """Whether the tension plate had yielded at the peak step, its first yield, and the
+    thesis' statement (thesis_plate_statement) with agreement; None without the column."""
+    thesis = thesis_plate_statement(specimen)
+    out: dict = {"plate_yielded_at_peak": None, "plate_first_yield": None,
+                 "thesis_plate_yielded": thesis, "plate_vs_thesis": None}
+    if YIELD_COLUMN not in hist:
+        return out
+    counts = np.asarray(hist[YIELD_COLUMN])[rows]
+    yielded = np.flatnonzero(counts > 0)
+    at_peak = bool(np.asarray(hist[YIELD_COLUMN])[i_peak] > 0)
+    out["plate_yielded_at_peak"] = at_peak
+    if yielded.size:
+        i = int(rows[yielded[0]])
+        out["plate_first_yield"] = {"step": int(hist["step"][i]),
+                                    "deflection": float(hist["control_displacement"][i])}
+    if thesis is not None:
+        out["plate_vs_thesis"] = "agrees" if at_peak == thesis else "contradicts"
+    return out
+
+
 def residual_line(residual: dict) -> str:
     """One line: where the crushed points lie at the end, the plate, the load left."""
     parts = [f"at {residual['deflection']:.4g} mm"]
@@ -260,6 +310,7 @@ def format_mechanism(check: dict) -> list[tuple[str, str]]:
             f"{check['stress_max_x']:.0f} mm (f_y {check['f_y']:.4g}; {check['source']})")))
     else:
         lines.append(("bottom plate at peak", str(check.get("source") or "-")))
+    lines.append(("bottom plate yielded", _yield_text(check)))
     lines.append(("first crushing", _first_crushing_text(check.get("first_crushing"))))
     lines.append(("residual mechanism", check.get("residual_mechanism") or "-"))
     return lines
@@ -273,3 +324,19 @@ def _first_crushing_text(first: dict | None) -> str:
         return f"{head}: {first['region']} ({first['source']})"
     return (f"{head}: x {first['x_min']:.0f}-{first['x_max']:.0f} mm, mostly {first['region']}, "
             f"mean y {first['y_mean']:.0f}")
+
+
+def _yield_text(check: dict) -> str:
+    at_peak = check.get("plate_yielded_at_peak")
+    if at_peak is None:
+        return "- (no tension_plate_yielded history column)"
+    first = check.get("plate_first_yield")
+    text = (f"by the peak (first at step {first['step']}, {first['deflection']:.4g} mm)"
+            if at_peak else "not by the peak" + (
+                f" (first at step {first['step']}, {first['deflection']:.4g} mm)"
+                if first else ", nor later"))
+    thesis = check.get("thesis_plate_yielded")
+    if thesis is not None:
+        text += (f"; thesis 4.2.1: {'yielded' if thesis else 'not yielded'} at the ultimate: "
+                 f"{check['plate_vs_thesis']}")
+    return text

@@ -9,8 +9,9 @@ icewall.analysis.reference where it knows the specimen, else from the deck's
 ratio mu reached, pass / fail / undecided, and the energy absorbed (area under the total jack
 load - control deflection curve, N mm). Mechanism checks (issue 20 §1,
 icewall.analysis.mechanism): the bottom (tension) plate's mean stress at the peak over f_y, at
-midspan and its largest along the span; where the first crushing occurred; the residual
-mechanism in a line (CSV only). Below the rows: the mean and the coefficient of
+midspan and its largest along the span; whether it had yielded by the peak and whether that
+agrees with thesis 4.2.1 (CF walls); where the first crushing occurred; the residual mechanism
+in a line (CSV only). Below the rows: the mean and the coefficient of
 variation (sample standard deviation / mean) of each ratio column over the rows that have a value.
 """
 
@@ -30,7 +31,8 @@ RATIOS = {  # column -> (reference field, our measure)
     "res_thesis/pred": ("residual_thesis", "residual_40"),
 }
 DUCTILITY = ("ductility_ratio", "ductility", "energy_Nmm")  # CSA S474 8.4.4 (icewall.post)
-MECHANISM = ("plate_mid/fy", "plate_max/fy", "first_crush", "residual_mechanism")
+MECHANISM = ("plate_mid/fy", "plate_max/fy", "plate_yield@peak", "vs_4.2.1", "first_crush",
+             "residual_mechanism")
 COLUMNS = ("name", "specimen", "overrides", "status", "peak", "peak_deflection", "peaked",
            "residual_40", "unit", "n_steps", "run_time_s", *RATIOS, *DUCTILITY, *MECHANISM,
            "reason")
@@ -77,6 +79,8 @@ def _mechanism(path: str) -> dict:
                 else "")
         where = " ".join(filter(None, [first["region"], span, f"@{first['deflection']:.4g}mm"]))
     return {"plate_mid/fy": check.get("mid_over_fy"), "plate_max/fy": check.get("max_over_fy"),
+            "plate_yield@peak": {True: "yes", False: "no"}.get(check.get("plate_yielded_at_peak")),
+            "vs_4.2.1": check.get("plate_vs_thesis"),
             "first_crush": where, "residual_mechanism": check.get("residual_mechanism")}
 
 

@@ -43,6 +43,9 @@ def test_probe_crushing_location():
     crushed = np.zeros((2, 4), bool)
     assert probe.crushing(crushed) == {}
     crushed[1, [0, 1]] = True  # the two points nearest x = 0 of the core
+    yielded = np.zeros((2, 4), bool)
+    yielded[0, 3] = yielded[1, 0] = True  # one plate point; the core's flag is not counted
+    assert probe.scalars(np.zeros((2, 4, 4)), None, yielded)["tension_plate_yielded"] == 1
     out = probe.crushing(crushed)
     assert out["crushed_x_min"] == pytest.approx(25.0 - 50.0 * G)
     assert out["crushed_x_max"] == pytest.approx(25.0 - 50.0 * G)
@@ -50,22 +53,26 @@ def test_probe_crushing_location():
     assert out["crushed_region"] == 1  # core_1's tag
 
 
-def write_run(path, *, history: bool, field_every: int = 1, n: int = 40):
+def write_run(path, *, history: bool, field_every: int = 1, n: int = 40, yield_step: int = 12,
+              specimen: str = "CF-4"):
     """Softening curve peaking at step 10 (10 MPa); the plate's midspan stress rises 40 MPa a
-    step; the core crushes from step 8, and from step 20 also at its far points."""
+    step and its points yield from `yield_step`; the core crushes from step 8, and from step 20
+    also at its far points."""
     d, p = softening(1.0, float(n))
     probe = MechanismProbe(tiny_mesh(), 2)
     with ResultWriter(path, deck_text=CF4_TEXT, deck_path="cf4.yaml", mesh=tiny_mesh(),
-                      attrs={"specimen": "CF-4", "load_measure": "w", "load_unit": "MPa",
+                      attrs={"specimen": specimen, "load_measure": "w", "load_unit": "MPa",
                              "gauss_order": 2}) as w:
         for i, (di, pi) in enumerate(zip(d, p, strict=True), start=1):
             stress = plate_stress(40.0 * i)
             crushed = np.zeros((2, 4), bool)
             crushed[1, [0, 1]] = i >= 8
             crushed[1, [2, 3]] = i >= 20
+            yielded = np.zeros((2, 4), bool)
+            yielded[0, 2:] = i >= yield_step
             scalars = {"crushed": int(crushed.sum()), "preload_stage": 0}
             if history:
-                scalars.update(probe.scalars(stress, crushed))
+                scalars.update(probe.scalars(stress, crushed, yielded))
             gauss = {"stress": stress} if i % field_every == 0 else {}
             w.write_step(StepRecord(
                 step=i, control_displacement=float(di), load=float(pi), load_factor=float(pi),
@@ -91,8 +98,28 @@ def test_check_from_history(tmp_path):
     assert "60% of the peak" in check["residual_mechanism"]
     assert "core_1" in check["residual_mechanism"]
     json.dumps(check)
+    assert check["plate_yielded_at_peak"] is False
+    assert check["plate_first_yield"] == {"step": 12, "deflection": 12.0}
+    assert check["thesis_plate_yielded"] is False and check["plate_vs_thesis"] == "agrees"
     labels = [label for label, _ in format_mechanism(check)]
-    assert labels == ["bottom plate at peak", "first crushing", "residual mechanism"]
+    assert labels == ["bottom plate at peak", "bottom plate yielded", "first crushing",
+                      "residual mechanism"]
+
+
+@pytest.mark.parametrize(("specimen", "yield_step", "verdict"), [
+    ("CF-4", 10, "contradicts"),  # yielded at the peak step: 4.2.1 says it had not
+    ("CF-8", 10, "agrees"),
+    ("CF-8", 11, "contradicts"),
+    ("TF-1", 5, None),  # the text says nothing of the TF plates
+])
+def test_plate_yield_against_4_2_1(tmp_path, specimen, yield_step, verdict):
+    check = mechanism_check(write_run(tmp_path / "r.h5", history=True, field_every=100,
+                                      yield_step=yield_step, specimen=specimen))
+    assert check["plate_yielded_at_peak"] is (yield_step <= 10)
+    assert check["plate_vs_thesis"] == verdict
+    text = dict(format_mechanism(check))["bottom plate yielded"]
+    assert ("not by the peak" in text) is (yield_step > 10)
+    assert (verdict or "thesis") in text if verdict else "thesis" not in text
 
 
 def test_check_falls_back_to_the_stress_field_at_the_peak(tmp_path):
