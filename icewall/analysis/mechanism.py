@@ -11,8 +11,11 @@
   (after ``fy_reduction``); in plane strain the plate's sigma_xx at first yield is about
   1.12 f_y (sigma_zz = nu sigma_xx), so a ratio >= 1 is a mean stress at or past f_y, not
   necessarily plastic flow.
-* **Whether the tension plate yielded by the peak** (its Gauss points that have yielded,
-  ``tension_plate_yielded``), next to what the thesis says of the wall: 4.2.1, "The ultimate
+* **Whether the tension plate yielded by the peak**: a section of it yielded through its whole
+  thickness (every Gauss point at one station along x, ``tension_plate_sections_yielded``; the
+  plate as a tension chord, not one face bent locally at a diaphragm, which
+  ``tension_plate_yielded``, the count of its yielded points, also catches), next to what the
+  thesis says of the wall: 4.2.1, "The ultimate
   load for all walls except Specimen CF-8 was reached before the bottom steel plate yielded"
   (and 5.3 for CF-8's analysis: the bottom plate "had yielded significantly").
 * **Where the first crushing occurs**: the crushed (compressive softening) Gauss points at the
@@ -39,7 +42,9 @@ from icewall.post.common import gauss_points_xy, gauss_volumes
 TENSION_PLATE = "bottom_plate"
 PLATE_COLUMNS = ("tension_plate_stress_mid", "tension_plate_stress_max",
                  "tension_plate_stress_max_x")
-YIELD_COLUMN = "tension_plate_yielded"
+YIELD_COLUMN = "tension_plate_yielded"  # yielded Gauss points of the plate
+SECTION_COLUMN = "tension_plate_sections_yielded"  # stations yielded through the thickness
+SECTION_X_COLUMN = "tension_plate_section_yield_x"  # the one of them nearest midspan
 CRUSH_COLUMNS = ("crushed_x_min", "crushed_x_max", "crushed_y_mean", "crushed_region")
 RESIDUAL_DEFLECTION = 40.0  # mm
 
@@ -91,7 +96,19 @@ class MechanismProbe:
         if crushed is not None:
             out.update(self.crushing(crushed))
         if yielded is not None and self.plate.any():
-            out[YIELD_COLUMN] = int(np.count_nonzero(yielded[self.plate]))
+            out.update(self.plate_yield(yielded))
+        return out
+
+    def plate_yield(self, yielded: np.ndarray) -> dict:
+        """Yielded points of the plate, the stations yielded through the whole thickness and
+        the x of the one nearest midspan (absent without any)."""
+        points = yielded[self.plate].ravel()
+        full = np.bincount(self.where, weights=points) == np.bincount(self.where)
+        out: dict = {YIELD_COLUMN: int(np.count_nonzero(points)),
+                     SECTION_COLUMN: int(np.count_nonzero(full))}
+        if full.any():
+            out[SECTION_X_COLUMN] = float(self.stations[full][np.argmin(np.abs(
+                self.stations[full]))])
         return out
 
 
@@ -259,21 +276,26 @@ def _reached_fy(hist: dict, rows: np.ndarray, i_peak: int, f_y: float | None) ->
 
 
 def _plate_yield(hist: dict, rows: np.ndarray, i_peak: int, specimen: str | None) -> dict:
-    """Whether the tension plate had yielded at the peak step, its first yield, and the
-    thesis' statement (thesis_plate_statement) with agreement; None without the column."""
+    """Whether a section of the tension plate had yielded through its thickness at the peak
+    step, its first such yield (and the first yield of any point), and the thesis' statement
+    (thesis_plate_statement) with agreement; None without the columns."""
     thesis = thesis_plate_statement(specimen)
     out: dict = {"plate_yielded_at_peak": None, "plate_first_yield": None,
+                 "plate_first_point_yield": None,
                  "thesis_plate_yielded": thesis, "plate_vs_thesis": None}
-    if YIELD_COLUMN not in hist:
+    if SECTION_COLUMN not in hist:
         return out
-    counts = np.asarray(hist[YIELD_COLUMN])[rows]
-    yielded = np.flatnonzero(counts > 0)
-    at_peak = bool(np.asarray(hist[YIELD_COLUMN])[i_peak] > 0)
+    at_peak = bool(np.asarray(hist[SECTION_COLUMN])[i_peak] > 0)
     out["plate_yielded_at_peak"] = at_peak
-    if yielded.size:
-        i = int(rows[yielded[0]])
-        out["plate_first_yield"] = {"step": int(hist["step"][i]),
-                                    "deflection": float(hist["control_displacement"][i])}
+    for key, column in (("plate_first_yield", SECTION_COLUMN),
+                        ("plate_first_point_yield", YIELD_COLUMN)):
+        hit = np.flatnonzero(np.asarray(hist[column])[rows] > 0)
+        if hit.size:
+            i = int(rows[hit[0]])
+            out[key] = {"step": int(hist["step"][i]),
+                        "deflection": float(hist["control_displacement"][i])}
+            if key == "plate_first_yield":
+                out[key]["x"] = _value(hist, SECTION_X_COLUMN, i)
     if thesis is not None:
         out["plate_vs_thesis"] = "agrees" if at_peak == thesis else "contradicts"
     return out
@@ -329,12 +351,16 @@ def _first_crushing_text(first: dict | None) -> str:
 def _yield_text(check: dict) -> str:
     at_peak = check.get("plate_yielded_at_peak")
     if at_peak is None:
-        return "- (no tension_plate_yielded history column)"
+        return f"- (no {SECTION_COLUMN} history column)"
     first = check.get("plate_first_yield")
-    text = (f"by the peak (first at step {first['step']}, {first['deflection']:.4g} mm)"
-            if at_peak else "not by the peak" + (
-                f" (first at step {first['step']}, {first['deflection']:.4g} mm)"
-                if first else ", nor later"))
+    where = (f"first at step {first['step']}, {first['deflection']:.4g} mm, x {first['x']:.0f}"
+             if first else "")
+    text = "through the thickness " + (f"by the peak ({where})" if at_peak else
+                                       "not by the peak" + (f" ({where})" if first else
+                                                            ", nor later"))
+    point = check.get("plate_first_point_yield")
+    if point is not None:
+        text += f"; first yielded point at step {point['step']}"
     thesis = check.get("thesis_plate_yielded")
     if thesis is not None:
         text += (f"; thesis 4.2.1: {'yielded' if thesis else 'not yielded'} at the ultimate: "

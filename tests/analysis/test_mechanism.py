@@ -45,7 +45,14 @@ def test_probe_crushing_location():
     crushed[1, [0, 1]] = True  # the two points nearest x = 0 of the core
     yielded = np.zeros((2, 4), bool)
     yielded[0, 3] = yielded[1, 0] = True  # one plate point; the core's flag is not counted
-    assert probe.scalars(np.zeros((2, 4, 4)), None, yielded)["tension_plate_yielded"] == 1
+    one = probe.scalars(np.zeros((2, 4, 4)), None, yielded)
+    assert one["tension_plate_yielded"] == 1  # one face only: no section through the thickness
+    assert one["tension_plate_sections_yielded"] == 0
+    assert "tension_plate_section_yield_x" not in one
+    yielded[0, 2] = True  # now both points of the far station
+    full = probe.scalars(np.zeros((2, 4, 4)), None, yielded)
+    assert full["tension_plate_sections_yielded"] == 1
+    assert full["tension_plate_section_yield_x"] == pytest.approx(25.0 + 50.0 * G)
     out = probe.crushing(crushed)
     assert out["crushed_x_min"] == pytest.approx(25.0 - 50.0 * G)
     assert out["crushed_x_max"] == pytest.approx(25.0 - 50.0 * G)
@@ -99,7 +106,9 @@ def test_check_from_history(tmp_path):
     assert "core_1" in check["residual_mechanism"]
     json.dumps(check)
     assert check["plate_yielded_at_peak"] is False
-    assert check["plate_first_yield"] == {"step": 12, "deflection": 12.0}
+    assert check["plate_first_yield"] == {"step": 12, "deflection": 12.0,
+                                          "x": pytest.approx(25.0 + 50.0 * G)}
+    assert check["plate_first_point_yield"]["step"] == 12
     assert check["thesis_plate_yielded"] is False and check["plate_vs_thesis"] == "agrees"
     labels = [label for label, _ in format_mechanism(check)]
     assert labels == ["bottom plate at peak", "bottom plate yielded", "first crushing",
