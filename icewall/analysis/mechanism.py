@@ -171,8 +171,8 @@ def _value(hist: dict, column: str, i: int) -> float | None:
     return None if np.isnan(v) or (column == "crushed_region" and v < 0) else v
 
 
-def _crush_at(hist: dict, i: int, names: dict[int, str]) -> dict | None:
-    if _value(hist, "crushed_x_min", i) is None:
+def _crush_at(hist: dict, i: int | None, names: dict[int, str]) -> dict | None:
+    if i is None or _value(hist, "crushed_x_min", i) is None:
         return None
     return {"step": int(hist["step"][i]), "deflection": float(hist["control_displacement"][i]),
             "x_min": _value(hist, "crushed_x_min", i), "x_max": _value(hist, "crushed_x_max", i),
@@ -182,6 +182,25 @@ def _crush_at(hist: dict, i: int, names: dict[int, str]) -> dict | None:
 
 def _plate_at(hist: dict, i: int) -> dict:
     return {c: _value(hist, c, i) for c in PLATE_COLUMNS if _value(hist, c, i) is not None}
+
+
+def _peak_plate(result, hist: dict, i_peak: int, peak_step: int) -> tuple[dict, str]:
+    """Plate stresses at the peak from the history, else from the stress field; and whence."""
+    plate = _plate_at(hist, i_peak)
+    if plate:
+        return plate, "history"
+    plate = _plate_from_field(result, peak_step)
+    if plate:
+        return plate, f"stress field at step {peak_step}"
+    return {}, ("no plate stress: neither the history columns nor the stress field at the peak "
+                "step (run with outputs.fields including stress)")
+
+
+def _first_crush_row(hist: dict, rows: np.ndarray) -> int | None:
+    if "crushed_x_min" not in hist:
+        return None
+    hit = np.flatnonzero(np.isfinite(np.asarray(hist["crushed_x_min"], float)[rows]))
+    return int(rows[hit[0]]) if hit.size else None
 
 
 def mechanism_check(path: str | os.PathLike) -> dict:
@@ -203,16 +222,8 @@ def mechanism_check(path: str | os.PathLike) -> dict:
         i_peak = int(rows[int(np.argmax(p))])
         peak_step = int(hist["step"][i_peak])
         out.update(peak_step=peak_step, peak_deflection=float(d[int(np.argmax(p))]))
-        plate = _plate_at(hist, i_peak)
-        out["source"] = "history" if plate else None
-        if not plate:
-            plate = _plate_from_field(r, peak_step)
-            out["source"] = f"stress field at step {peak_step}" if plate else (
-                "no plate stress: neither the history columns nor the stress field at the peak "
-                "step (run with outputs.fields including stress)")
-        crushed = next((i for i in rows if _value(hist, "crushed_x_min", int(i)) is not None),
-                       None)
-        first = _crush_at(hist, int(crushed), names) if crushed is not None else None
+        plate, out["source"] = _peak_plate(r, hist, i_peak, peak_step)
+        first = _crush_at(hist, _first_crush_row(hist, rows), names)
         end = _end_row(d, rows)
         residual = _crush_at(hist, end, names)
         end_plate = _plate_at(hist, end)
