@@ -174,6 +174,7 @@ def _write_linear(model, writer: ResultWriter, fields: set[str], say, timings) -
 
 def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings,
                      restart: ResumePoint | None = None) -> tuple[int, str, str]:
+    from icewall.analysis.mechanism import MechanismProbe, crushed_points, yielded_points
     from icewall.errors import ConvergenceError
     from icewall.solve.nonlinear import run_nonlinear
 
@@ -183,6 +184,7 @@ def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings
     n_steps = first
     start = time.perf_counter() - elapsed
     status, reason = "completed", ""
+    probe = MechanismProbe(model.mesh, deck.analysis.gauss)  # issue 20 §1, history columns
     try:
         steps = run_nonlinear(model, restart.checkpoint if restart else None)
         for n_steps, report in enumerate(steps, start=first + 1):
@@ -194,6 +196,9 @@ def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings
             if due and "state" in fields:
                 gauss.update(report.state_fields())
             load = inc.load_factor * model.measure_factor
+            groups, shape = report.structure.groups, ev.stress.shape[:2]
+            mechanism = probe.scalars(ev.stress, crushed_points(groups, ev.states, shape),
+                                      yielded_points(groups, ev.states, shape))
             writer.write_step(StepRecord(
                 step=n_steps, control_displacement=inc.control_displacement, load=load,
                 load_factor=inc.load_factor, iterations=inc.iterations,
@@ -203,7 +208,7 @@ def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings
                 scalars={**report.counts, **report.energy, "step_cuts": inc.cuts,
                          "snap_back": int(inc.snap_back), "jumped": int(inc.jumped),
                          "preload_stage": int(inc.kind == "preload"),
-                         "preload_factor": inc.preload_factor},
+                         "preload_factor": inc.preload_factor, **mechanism},
                 arrays=report.arrays if due and "state" in fields else {},
                 forensics={k: np.asarray(v, dtype=np.int64) for k, v in inc.forensics.items()}))
             writer.write_checkpoint(report.checkpoint())

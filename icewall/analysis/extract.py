@@ -26,11 +26,13 @@ Definitions (deflection d = the control displacement, mm; load P in the run's lo
   Where the Gauss field ``concrete_flags`` is stored, ``first_crushing`` also names the region
   and element centroid (x, y) with the most crushed points at its first stored crushed step.
 * Tension (bottom) plate: from the Gauss field ``equivalent_plastic_strain`` of the
-  ``bottom_plate`` cells at the stored steps (first step with eps_p > 0); without that field it
-  falls back to the ``yielded`` count, which counts every steel region (plates and diaphragms),
-  and says so in ``tension_plate_yield.source``. ``tension_plate_yielded``: "before_peak" (at or
-  before the peak step), "after_peak", "undetermined" (fields not stored densely enough to tell)
-  or "no" (not within the run); None without any yield information.
+  ``bottom_plate`` cells at the stored steps (first step with eps_p > 0); without that field
+  from the history column ``tension_plate_yielded`` (the bottom plate's yielded Gauss points,
+  every step: icewall.analysis.mechanism), else from the ``yielded`` count, which counts every
+  steel region (plates and diaphragms); ``tension_plate_yield.source`` says which.
+  ``tension_plate_yielded``: "before_peak" (at or before the peak step), "after_peak",
+  "undetermined" (fields not stored densely enough to tell) or "no" (not within the run); None
+  without any yield information.
 """
 
 from __future__ import annotations
@@ -191,6 +193,12 @@ def _tension_plate(hist: dict, fields: dict, peak_step: int) -> tuple[dict | Non
         else:
             verdict = "undetermined"
         return ev, verdict
+    if "tension_plate_yielded" in hist:
+        ev = _event(hist, "tension_plate_yielded", peak_step)
+        note = "tension_plate_yielded history column (bottom plate Gauss points)"
+        if ev is None:
+            return {"source": note}, "no"
+        return {**ev, "source": note}, "before_peak" if ev["step"] <= peak_step else "after_peak"
     if "yielded" in hist:
         ev = _event(hist, "yielded", peak_step)
         note = "yielded count of all steel regions (no equivalent_plastic_strain field stored)"

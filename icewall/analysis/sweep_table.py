@@ -9,7 +9,11 @@ is no prediction of the ultimate load, nor its load at 40 mm of the residual. Re
 come from icewall.analysis.reference where it knows the specimen, else from the deck's
 `specimen.reference`. Ductility per CSA S474 clause 8.4.4 (icewall.post.ductility): the
 ratio mu reached, pass / fail / undecided, and the energy absorbed (area under the total jack
-load - control deflection curve, N mm). Below the rows: the mean and the coefficient of
+load - control deflection curve, N mm). Mechanism checks (issue 20 §1,
+icewall.analysis.mechanism): the bottom (tension) plate's mean stress at the peak over f_y, at
+midspan and its largest along the span; whether it had yielded by the peak and whether that
+agrees with thesis 4.2.1 (CF walls); where the first crushing occurred; the residual mechanism
+in a line (CSV only). Below the rows: the mean and the coefficient of
 variation (sample standard deviation / mean) of each ratio column over the rows that have a value.
 """
 
@@ -29,8 +33,12 @@ RATIOS = {  # column -> (reference field, our measure)
     "res_thesis/pred": ("residual_thesis", "residual_40"),
 }
 DUCTILITY = ("ductility_ratio", "ductility", "energy_Nmm")  # CSA S474 8.4.4 (icewall.post)
+MECHANISM = ("plate_mid/fy", "plate_max/fy", "plate_yield@peak", "vs_4.2.1", "first_crush",
+             "residual_mechanism")
 COLUMNS = ("name", "specimen", "overrides", "status", "peak", "peak_deflection", "peaked",
-           "residual_40", "unit", "n_steps", "run_time_s", *RATIOS, *DUCTILITY, "reason")
+           "residual_40", "unit", "n_steps", "run_time_s", *RATIOS, *DUCTILITY, *MECHANISM,
+           "reason")
+_CSV_ONLY = ("reason", "residual_mechanism")
 _HEADERS = {"peak_deflection": "defl@peak", "residual_40": "res@40mm", "run_time_s": "time_s",
             "n_steps": "steps", "ductility_ratio": "mu", "energy_Nmm": "energy_Nmm"}
 _SCALE = {"N": 1.0, "kN": 1e3, "MN": 1e6, "MPa": 1.0, "N/mm2": 1.0}
@@ -54,7 +62,28 @@ def _measures(path: str) -> dict:
             "peaked": {True: "yes", False: "no"}.get(fig.get("peaked")),
             "residual_40": fig.get("residual_load_40"),
             "ductility_ratio": ductility.get("ductility_ratio"),
-            "ductility": _verdict(ductility), "energy_Nmm": ductility.get("energy_Nmm")}
+            "ductility": _verdict(ductility), "energy_Nmm": ductility.get("energy_Nmm"),
+            **_mechanism(path)}
+
+
+def _mechanism(path: str) -> dict:
+    """The MECHANISM columns of one result (icewall.analysis.mechanism)."""
+    from icewall.analysis.mechanism import mechanism_check
+
+    try:
+        check = mechanism_check(path)
+    except Exception as exc:  # noqa: BLE001 - the row keeps its loads; the check says why
+        return {"residual_mechanism": f"mechanism check failed: {exc}"}
+    first = check.get("first_crushing")
+    where = None
+    if first is not None:
+        span = (f"x {first['x_min']:.0f}-{first['x_max']:.0f}" if "x_min" in first
+                else "")
+        where = " ".join(filter(None, [first["region"], span, f"@{first['deflection']:.4g}mm"]))
+    return {"plate_mid/fy": check.get("mid_over_fy"), "plate_max/fy": check.get("max_over_fy"),
+            "plate_yield@peak": {True: "yes", False: "no"}.get(check.get("plate_yielded_at_peak")),
+            "vs_4.2.1": check.get("plate_vs_thesis"),
+            "first_crush": where, "residual_mechanism": check.get("residual_mechanism")}
 
 
 def _verdict(ductility: dict) -> str | None:
@@ -139,7 +168,8 @@ def _text(value, column: str) -> str:
         return "-"
     if isinstance(value, float):
         return (f"{value:.3f}" if column in RATIOS or column == "run_time_s" else
-                f"{value:.2f}" if column == "ductility_ratio" else f"{value:.5g}")
+                f"{value:.2f}" if column in ("ductility_ratio", *MECHANISM[:2]) else
+                f"{value:.5g}")
     return str(value)
 
 
@@ -161,13 +191,13 @@ def write_csv(path: str | os.PathLike, rows: list[dict], stats,
 
 def format_table(rows: list[dict], stats) -> str:
     """Aligned text table (without the reason column; failures are listed under it)."""
-    columns = [c for c in COLUMNS if c != "reason"]
+    columns = [c for c in COLUMNS if c not in _CSV_ONLY]
     body = [[_text(r.get(c), c) or ("-" if r in rows else "") for c in columns]
             for r in rows + _stat_rows(stats)]
     head = [_HEADERS.get(c, c) for c in columns]
     widths = [max(len(x) for x in col) for col in zip(head, *body, strict=True)]
     numeric = {"peak", "peak_deflection", "residual_40", "n_steps", "run_time_s", *RATIOS,
-               "ductility_ratio", "energy_Nmm"}
+               "ductility_ratio", "energy_Nmm", *MECHANISM[:2]}
 
     def line(cells):
         return "  ".join(x.rjust(w) if c in numeric else x.ljust(w)

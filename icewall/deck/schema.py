@@ -190,6 +190,11 @@ class Interface:
                                         "floating; they act as shear connectors and carry far "
                                         "more shear than friction allows)", minimum=0,
                                         maximum=10)
+    fixed_point_placement: tuple[str, ...] = option(
+        ["top"], doc="where fixed pairs stand, any of: top (fixed_points_per_core pairs at "
+        "each core's top-face mid-length), corners (every core corner at the diaphragm-plate "
+        "junctions), bottom_support (fixed_points_per_core bottom-face pairs each side of "
+        "each support); thesis 4.3.2, Fig. 4.15 lost (icewall.interface.gap)")
     stabilization: float = option(1e-6, doc="weak springs between paired nodes in the "
                                   "iteration matrix only (relative to the largest stiffness "
                                   "diagonal): keep a core whose pairs all open in an iterate "

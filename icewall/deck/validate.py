@@ -101,6 +101,7 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
             and analysis.formulation != "plane_strain"):
         raise fail("plane-stress plates are an option of plane-strain analyses only",
                    "materials.steel.formulation")
+    _check_fixed_points(deck, fail)
     _check_mesh_size(deck, fail)
     if len(set(deck.outputs.fields)) != len(deck.outputs.fields):
         raise fail("a field is listed twice", "outputs.fields")
@@ -144,3 +145,17 @@ def _check_preload(deck: Deck, fail: ErrorFactory) -> None:
         raise fail(f"{force:.4g} N is beyond the section's {what} {limit:.4g} N "
                    f"(f'c = {concrete.fc:g}, f_y = {steel.fy:g} MPa, b = {geo.width:g} mm); "
                    "is the unit N?", "loads.preload.axial_force")
+
+
+def _check_fixed_points(deck: Deck, fail: ErrorFactory) -> None:
+    from icewall.interface.gap import FIXED_POINT_PLACEMENTS, PLACEMENTS_WIRED
+
+    key = "materials.interface.fixed_point_placement"
+    for i, where in enumerate(deck.materials.interface.fixed_point_placement):
+        if where not in FIXED_POINT_PLACEMENTS:
+            raise fail(f"unknown fixed-point placement {where!r} (one of "
+                       f"{', '.join(FIXED_POINT_PLACEMENTS)})", f"{key}[{i}]")
+        if where not in PLACEMENTS_WIRED:
+            raise fail(f"fixed-point placement {where!r} is not passed to the solver yet "
+                       f"(issue 19 wires it; today: {', '.join(PLACEMENTS_WIRED)})",
+                       f"{key}[{i}]")

@@ -196,17 +196,85 @@ def friction_work_increment(state_old: GapState, state_new: GapState) -> float:
     return float(np.sum((mean_force * np.abs(state_new.gap_T - state_old.gap_T))[slipping]))
 
 
-def choose_fixed_points(mesh: Mesh, per_core: int = 2, tol: float = 1e-6) -> np.ndarray:
-    """Permanent pairs (n_pairs,) bool: per concrete region (core), `per_core` top-face pairs.
+FIXED_POINT_PLACEMENTS = ("top", "corners", "bottom_support")
+# Placements the current solver passes on: icewall.solve.gap_constraints calls
+# choose_fixed_points(mesh, per_core) (top face only). The solver of issue 19 is to call
+# fixed_point_mask(mesh, interface) instead and list every placement here.
+PLACEMENTS_WIRED = ("top",)
 
-    Reading of §4.3.2 (Fig. 4.15, which showed them, is lost): in each core the pairs on its
-    TOP interface (normal n = (0, -1), under the loaded top plate; corner pairs excluded)
-    nearest the core's mid-length x (for a half-model core cut by the "symmetry" node set,
-    the symmetry line, where the full core's mid-length lies). One pair only stops the core
-    translating; it can still rotate about that pair when all others are FREE, so the default
-    takes the two nearest (adjacent) pairs. A core without a top face falls back to its
-    non-corner pairs.
+
+def fixed_point_mask(mesh: Mesh, interface) -> np.ndarray | None:
+    """Permanent pairs (n_pairs,) bool of a deck's ``materials.interface`` (its
+    fixed_points_per_core and fixed_point_placement), or None where it asks for none."""
+    placement = tuple(getattr(interface, "fixed_point_placement", ("top",)))
+    per_core = interface.fixed_points_per_core
+    if per_core == 0 and "corners" not in placement:
+        return None
+    chosen = np.zeros(len(mesh.interface_pairs), dtype=bool)
+    for where in placement:
+        chosen |= choose_fixed_points(mesh, per_core=per_core, placement=where)
+    return chosen
+
+
+def _pair_cores(mesh: Mesh) -> np.ndarray:
+    """Concrete region tag of each pair's concrete node (-1 for none)."""
+    node_region = np.full(mesh.n_nodes, -1)
+    concrete = mesh.cells_of_kind(CONCRETE)
+    node_region[mesh.cells[concrete]] = mesh.cell_region[concrete][:, None]
+    return node_region[mesh.interface_pairs[:, 1]]
+
+
+def _bottom_support_points(mesh: Mesh, per_core: int, tol: float) -> np.ndarray:
+    """On the bottom face (normal (0, +1), over the bottom plate; corners excluded), the
+    `per_core` pairs nearest each support's x on either side of it (the cores next to the
+    support: thesis 5.2, the post-peak stresses "enter the support by means of the diaphragm
+    and bottom plates")."""
+    pairs, normals = mesh.interface_pairs, mesh.interface_normals
+    chosen = np.zeros(len(pairs), dtype=bool)
+    bottom = (np.abs(normals[:, 0]) < tol) & (normals[:, 1] > 0) & ~mesh.interface_corner
+    bottom &= _pair_cores(mesh) >= 0
+    if not bottom.any() or per_core == 0:
+        return chosen
+    x, y = mesh.points[pairs[:, 1]].T
+    bottom &= y <= y[bottom].min() + tol  # the face over the bottom plate, not a leg's top
+    supports = [mesh.points[nodes, 0] for name, nodes in mesh.node_sets.items()
+                if name.startswith("support")]
+    for xs in np.unique(np.concatenate(supports)) if supports else ():
+        for side in (x <= xs + tol, x >= xs - tol):  # inward and outward of the support
+            candidates = np.flatnonzero(bottom & side)
+            order = np.lexsort((x[candidates], np.abs(x[candidates] - xs)))
+            chosen[candidates[order[:per_core]]] = True
+    return chosen
+
+
+def choose_fixed_points(mesh: Mesh, per_core: int = 2, tol: float = 1e-6,
+                        placement: str = "top") -> np.ndarray:
+    """Permanent pairs (n_pairs,) bool, at one `placement` (Fig. 4.15, which showed the
+    thesis' fixed points, is lost; 4.3.2 says only "a number of fixed points were used to keep
+    the core inside the steel plates"):
+
+    * "top": per concrete region (core), `per_core` top-face pairs. In each core the pairs on
+      its TOP interface (normal n = (0, -1), under the loaded top plate; corner pairs excluded)
+      nearest the core's mid-length x (for a half-model core cut by the "symmetry" node set,
+      the symmetry line, where the full core's mid-length lies). One pair only stops the core
+      translating; it can still rotate about that pair when all others are FREE, so the default
+      takes the two nearest (adjacent) pairs. A core without a top face falls back to its
+      non-corner pairs.
+    * "corners": every corner pair, i.e. the core corners at the diaphragm-plate (and end
+      plate-plate) junctions; `per_core` does not apply.
+    * "bottom_support": `per_core` bottom-face pairs on each side of each support.
     """
+    if placement not in FIXED_POINT_PLACEMENTS:
+        raise ValueError(f"unknown fixed-point placement {placement!r} "
+                         f"(one of {', '.join(FIXED_POINT_PLACEMENTS)})")
+    if placement == "corners":
+        return mesh.interface_corner.astype(bool) & (_pair_cores(mesh) >= 0)
+    if placement == "bottom_support":
+        return _bottom_support_points(mesh, per_core, tol)
+    return _top_face_points(mesh, per_core, tol)
+
+
+def _top_face_points(mesh: Mesh, per_core: int, tol: float) -> np.ndarray:
     pairs, normals = mesh.interface_pairs, mesh.interface_normals
     chosen = np.zeros(len(pairs), dtype=bool)
     if len(pairs) == 0:

@@ -24,6 +24,7 @@ def solver_label(solver: str | None) -> str:
 
 def summarize(path: str | os.PathLike) -> dict:
     """Key numbers of one analysis as a JSON-serialisable dict (None where there are no steps)."""
+    from icewall.analysis.mechanism import mechanism_check
     from icewall.post.ductility import result_ductility
 
     with open_result(path) as r:
@@ -47,6 +48,8 @@ def summarize(path: str | os.PathLike) -> dict:
         "ductility": ductility,  # CSA S474 8.4.4, icewall.post.ductility
         "snap_throughs": [],  # control deflections where a snap-back drop was accepted
         "jumps": [],  # control deflections reached by a step over a stall (max_jumps)
+        # issue 20 §1: bottom plate at the peak vs f_y, first crushing, residual mechanism
+        "mechanism": mechanism_check(path) if len(h["step"]) else None,
     }
     if out["n_steps"]:
         load, defl, its = h["load"], h["control_displacement"], h["iterations"]
@@ -90,6 +93,8 @@ def _ductility_rows(d: dict | None, unit: str) -> list[tuple[str, str]]:
 
 def format_summary(summary: dict) -> str:
     """Human-readable block of aligned ``key : value unit`` lines."""
+    from icewall.analysis.mechanism import format_mechanism
+
     s = summary
     lu = s.get("load_unit") or ""
     measure = s.get("load_measure")
@@ -117,6 +122,7 @@ def format_summary(summary: dict) -> str:
          or "none"),
         ("run time", _num(s.get("run_time_s"), "s", ".1f")),
         *_ductility_rows(s.get("ductility"), lu),
+        *(format_mechanism(s["mechanism"]) if s.get("mechanism") else []),
     ]
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}} : {v}" for k, v in rows)

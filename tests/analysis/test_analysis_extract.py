@@ -165,3 +165,18 @@ def test_bad_input():
         extract(42)
     with pytest.raises(ValueError):
         extract(([1.0, 2.0], [1.0]))
+
+
+def test_tension_plate_from_its_history_column():
+    """Issue 20: the bottom plate's own yield count, recorded every step, beats the count of
+    all steel (here the diaphragms yield first, at step 3; the plate at step 12)."""
+    d, p = softening(1.0, 20.0)
+    n = len(d)
+    hist = {"deflection": d, "load": p,
+            "yielded": (np.arange(1, n + 1) >= 3).astype(int),
+            "tension_plate_yielded": 4 * (np.arange(1, n + 1) >= 12).astype(int)}
+    r = extract(hist)
+    assert r["first_yield"]["step"] == 3
+    assert r["tension_plate_yield"]["step"] == 12
+    assert r["tension_plate_yielded"] == "after_peak"
+    assert "tension_plate_yielded" in r["tension_plate_yield"]["source"]

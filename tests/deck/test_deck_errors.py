@@ -102,3 +102,15 @@ def test_half_patch_overlapping_its_mirror(write_deck, cf4_text):
     path = write_deck(cf4_text.replace("[0.0, 300.0, 600.0, 916.5]", "[10.0, 300.0]", 1))
     with pytest.raises(DeckError, match="mirror"):
         load_deck(path)
+
+
+
+@pytest.mark.parametrize(("value", "words"), [("[corners]", "not passed to the solver"),
+                                              ("[sides]", "unknown fixed-point placement")])
+def test_fixed_point_placements_not_yet_in_the_solver_are_refused(value, words):
+    from pathlib import Path
+
+    deck = Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml"
+    with pytest.raises(DeckError, match=words) as err:
+        load_deck(deck, [f"materials.interface.fixed_point_placement={value}"])
+    assert "fixed_point_placement[0]" in str(err.value)

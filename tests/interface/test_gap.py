@@ -219,3 +219,51 @@ def test_slip_against_its_friction_force_is_reversed_switchable():
     assert stuck.state.tolist() == [FIXED, SLIP] and flips == 1
     assert stuck.stick_T[0] == pytest.approx(0.01)
     assert stuck.transitions["slip->fixed (reversal)"] == 1
+
+
+def _cf4_mesh():
+    from icewall.deck.load import load_deck
+    from icewall.mesh.build import build_mesh
+
+    return build_mesh(load_deck(Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml",
+                                ()).deck)
+
+
+def test_fixed_points_at_the_diaphragm_plate_corners():
+    mesh = _cf4_mesh()
+    chosen = choose_fixed_points(mesh, placement="corners")
+    xy = mesh.points[mesh.interface_pairs[chosen, 1]]
+    # CF-4 half model: diaphragms at 450 and 750 (t_d 6.4), end plate at 1083: both faces of
+    # each diaphragm meet both plates, the end plate's inner face too
+    xs = sorted({round(float(x), 1) for x in xy[:, 0]})
+    assert xs == [446.8, 453.2, 746.8, 753.2, 1076.6]
+    assert sorted({round(float(y), 1) for y in xy[:, 1]}) == [12.6, 237.4]
+    assert chosen.sum() == 10
+
+
+def test_fixed_points_on_the_bottom_face_next_to_the_support():
+    mesh = _cf4_mesh()
+    chosen = choose_fixed_points(mesh, per_core=2, placement="bottom_support")
+    xy = mesh.points[mesh.interface_pairs[chosen, 1]]
+    assert chosen.sum() == 4
+    np.testing.assert_allclose(mesh.interface_normals[chosen], [[0.0, 1.0]] * 4)
+    assert np.allclose(xy[:, 1], 12.6)  # on the bottom plate
+    inward, outward = np.sort(xy[xy[:, 0] < 750.0, 0]), np.sort(xy[xy[:, 0] > 750.0, 0])
+    assert len(inward) == len(outward) == 2
+    assert inward[-1] > 690.0 and outward[0] < 810.0  # the pairs nearest the support
+
+
+def test_fixed_point_mask_of_a_deck_combines_placements():
+    from types import SimpleNamespace
+
+    from icewall.interface.gap import fixed_point_mask
+
+    mesh = _cf4_mesh()
+    none = SimpleNamespace(fixed_points_per_core=0, fixed_point_placement=("top",))
+    assert fixed_point_mask(mesh, none) is None
+    both = SimpleNamespace(fixed_points_per_core=2, fixed_point_placement=("top", "corners"))
+    mask = fixed_point_mask(mesh, both)
+    assert mask.sum() == (choose_fixed_points(mesh).sum()
+                          + choose_fixed_points(mesh, placement="corners").sum())
+    with pytest.raises(ValueError, match="placement"):
+        choose_fixed_points(mesh, placement="sides")

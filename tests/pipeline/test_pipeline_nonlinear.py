@@ -92,3 +92,36 @@ def test_energy_balance(cf4_nonlinear):
                  + h["friction_work"] + h["energy_imbalance"])
         assert np.allclose(parts, h["external_work"])
         assert np.all(h["friction_work"] >= -1e-6 * h["external_work"])
+
+
+def test_mechanism_history_matches_the_stored_stress(cf4_nonlinear):
+    """Issue 20 §1: the bottom-plate columns of the history agree with the plate stresses
+    recomputed from the stored stress field (icewall.post.plate_stresses) and its plastic
+    strain, and the crushed x range with the stored concrete flags."""
+    from icewall.post.common import gauss_points_xy
+    from icewall.post.plate_stresses import member_stresses
+
+    _, model, report = cf4_nonlinear
+    with open_result(report.path) as res:
+        h = res.history
+        assert {"tension_plate_stress_mid", "tension_plate_stress_max",
+                "crushed_x_min"} <= set(h)
+        for step in res.steps[::4]:
+            _, stations, mean = member_stresses(res.mesh, res.gauss(step, "stress"),
+                                                3)["bottom_plate"]
+            i = step - 1
+            assert h["tension_plate_stress_mid"][i] == pytest.approx(
+                mean[np.argmin(np.abs(stations))], rel=1e-9, abs=1e-9)
+            assert h["tension_plate_stress_max"][i] == pytest.approx(mean.max(), rel=1e-9)
+            plate = res.mesh.cell_region == next(r.tag for r in res.mesh.regions
+                                                 if r.name == "bottom_plate")
+            peeq = res.gauss(step, "equivalent_plastic_strain")[plate]
+            assert h["tension_plate_yielded"][i] == np.count_nonzero(peeq > 0)
+            crushed = (res.gauss(step, "concrete_flags")[..., 3:6] != 0).any(axis=2)
+            if crushed.any():
+                x = gauss_points_xy(res.mesh, 3)[crushed][:, 0]
+                assert h["crushed_x_min"][i] == pytest.approx(x.min())
+                assert h["crushed_x_max"][i] == pytest.approx(x.max())
+            else:
+                assert np.isnan(h["crushed_x_min"][i])
+        assert h["tension_plate_stress_mid"][-1] > 0.0  # tension at midspan

@@ -133,6 +133,10 @@ def test_sweep_table_and_ratios(tmp_path):
         # a linear run never peaks: no ratio (tests/reliability checks the ratios of runs
         # that did peak, and that only those enter the mean and CoV)
         assert row["peaked"] == "no" and row["ult_test/pred"] == ""
+    # issue 20 §1 columns; a linear run has no history columns: from the stored stress field
+    cf4 = rows["cf4"]
+    assert 0.0 < float(cf4["plate_mid/fy"]) <= float(cf4["plate_max/fy"])
+    assert cf4["residual_mechanism"].startswith("at 2 mm")
     assert rows["mean"]["ult_test/pred"] == rows["mean"]["res_test/pred"] == ""
 
 
