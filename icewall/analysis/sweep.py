@@ -225,11 +225,17 @@ def finished_status(job: Job) -> str | None:
     return reuse_verdict(job)[0]
 
 
+_RUN_IN_PROGRESS = False  # in a worker: whether run_job is running (SIGTERM interrupts it)
+_STOPPING = False  # in a worker: SIGTERM came; the worker ends once its run is closed
+
+
 def run_job(job: Job) -> dict:
     """Run one job (in a worker); never raises: a failure is a result with status failed."""
+    global _RUN_IN_PROGRESS
     start = time.perf_counter()
     out = {"name": job.name, "path": job.output, "status": "failed", "reason": "",
            "run_time_s": 0.0, "n_steps": 0}
+    _RUN_IN_PROGRESS = True
     try:
         from icewall.deck.load import load_deck
         from icewall.pipeline import run_deck
@@ -243,6 +249,10 @@ def run_job(job: Job) -> dict:
         out["reason"] = str(exc)
     except Exception as exc:  # noqa: BLE001 - any failure is this job's, the sweep goes on
         out["reason"] = f"{type(exc).__name__}: {exc}"
+    finally:
+        _RUN_IN_PROGRESS = False
+        if _STOPPING:  # the sweep is stopping: its table lists only finished runs
+            os._exit(143)
     out["run_time_s"] = time.perf_counter() - start
     return out
 
@@ -260,6 +270,12 @@ def _die_with(sweep_pid: int) -> None:
     import threading
 
     def interrupted(signum, frame) -> None:
+        global _STOPPING
+        if not _RUN_IN_PROGRESS:  # an idle worker just ends
+            os._exit(128 + signum)
+        if _STOPPING:  # a repeated signal: let the run close its file first
+            return
+        _STOPPING = True
         raise Interrupted(signal.Signals(signum).name, 128 + signum)
 
     signal.signal(signal.SIGTERM, interrupted)
@@ -300,9 +316,9 @@ def _pool(workers: int):
                                initargs=(os.getpid(),))
 
 
-def _stop_workers(pool) -> None:
-    """SIGTERM the pool's workers: each run records the interruption and keeps its steps."""
-    for process in list(getattr(pool, "_processes", {}).values()):
+def _stop_workers(workers) -> None:
+    """SIGTERM a pool's workers: each run records the interruption and keeps its steps."""
+    for process in workers:
         if process.is_alive():
             process.terminate()
 
@@ -327,8 +343,9 @@ def run_local(jobs: list[Job], workers: int, done: Callable[[dict], None],
                 except Exception as exc:  # noqa: BLE001
                     done(_failed(futures[future], f"{type(exc).__name__}: {exc}"))
         except BaseException:  # Ctrl-C, SIGTERM: start no more runs, stop the running ones
+            workers = list((getattr(pool, "_processes", None) or {}).values())
             pool.shutdown(wait=False, cancel_futures=True)
-            _stop_workers(pool)
+            _stop_workers(workers)
             raise
     if suspects:
         from concurrent.futures import ThreadPoolExecutor
