@@ -229,6 +229,9 @@ class ResultWriter:
         self._lock, self._own_lock = _take_lock(self.path, lock)
         try:
             refuse_output_links(self.path)
+            if os.path.exists(self.partial_path) and os.lstat(self.partial_path).st_nlink > 1:
+                raise ResultError(f"refusing to resume {self.partial_path}: it is a hard link "
+                                  f"to another file")
             self._f = h5py.File(self.partial_path, "a")
         except OSError as exc:
             self._release()

@@ -22,9 +22,11 @@ from reliability_helpers import (
 )
 
 from icewall.analysis.sweep import expand_jobs, run_job
+from icewall.errors import ResultError
 from icewall.results.checkpoint import write_checkpoint
 from icewall.results.output_safety import OutputLock
 from icewall.results.reader import open_result
+from icewall.results.writer import ResultWriter
 
 
 def _steps_on_disk(partial) -> int:
@@ -130,3 +132,18 @@ def test_empty_specimen_name_uses_the_deck_stem(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cf4.h5"]
     with h5py.File(tmp_path / "cf4.h5") as f:
         assert f.attrs["specimen"] == ""
+
+
+
+def test_a_hard_linked_partial_is_never_written_into(tmp_path):
+    out = tmp_path / "cf4.h5"
+    victim = tmp_path / "victim.h5"
+    sets = [*LINEAR, "--set", "loads.control.target=1"]
+    assert icewall("run", CF4, *sets, "-q", "-o", str(victim)).returncode == 0
+    before = digest(victim)
+    os.link(victim, str(out) + ".partial")
+    with pytest.raises(ResultError, match="hard link"):
+        ResultWriter.reopen(out, 0)  # what --resume of a nonlinear run opens
+    done = icewall("run", CF4, *sets, "-q", "--resume", "-o", str(out))  # linear: anew
+    assert done.returncode == 0, done.stderr
+    assert digest(victim) == before and out.exists()
