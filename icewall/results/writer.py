@@ -11,8 +11,10 @@ free space before every step: a full disk stops it with DiskFullError, every con
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from datetime import datetime
@@ -142,6 +144,17 @@ def check_writable(path: str | os.PathLike) -> None:
            if not os.access(directory, os.W_OK | os.X_OK) else "")
     if why:
         raise ResultError(f"cannot write results to {path}: {why}")
+
+
+def _exit_without_hdf5_shutdown() -> None:
+    """atexit hook once an HDF5 write failed: HDF5 crashes (SIGSEGV) closing that file at
+    exit, so end the process here with exit code 1, after flushing the output streams."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(DiskFullError.exit_code)
 
 
 def refuse_output_links(path: str) -> None:
@@ -349,14 +362,16 @@ class ResultWriter:
             raise DiskFullError(f"{exc}; the {self._n} converged steps are kept in "
                                 f"{self.partial_path}; free space, then run again with "
                                 f"--resume") from None
+        kept = self._n
         try:
             self._append(core, arrays, extra, forensics)
         except (OSError, RuntimeError) as exc:
             self._broken = True  # HDF5 cannot write this file any more
+            atexit.register(_exit_without_hdf5_shutdown)
             if is_disk_full(exc):
                 raise DiskFullError(f"disk full writing step {core['step']} to "
-                                    f"{self.partial_path}; the {self._n} converged steps "
-                                    f"before it are kept") from None
+                                    f"{self.partial_path} ({kept} steps written before it; "
+                                    f"the file may be damaged)") from None
             raise ResultError(f"cannot write step {core['step']} to {self.partial_path}: "
                               f"{exc}") from None
 
@@ -425,11 +440,7 @@ class ResultWriter:
             self._release()
 
     def _close(self, status: str, reason: str) -> None:
-        if self._broken:  # HDF5 refuses further writes; close what can be closed
-            try:
-                self._f.close()
-            except (OSError, RuntimeError):
-                pass
+        if self._broken:  # closing would crash HDF5; the file keeps its last flushed state
             return
         try:
             self._f.attrs.update({"status": status, "stop_reason": str(reason),

@@ -8,6 +8,7 @@ from __future__ import annotations
 import errno
 import os
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -85,6 +86,23 @@ def test_full_disk_stops_cleanly_and_resume_finishes(small_disk, tmp_path, solve
     reference = tmp_path / "reference.h5"
     assert icewall("run", CF4, *sets, "-q", "-o", str(reference)).returncode == 0
     np.testing.assert_array_equal(_history(out), _history(reference))
+
+
+def test_hdf5_write_failing_unforeseen_does_not_crash(small_disk):
+    """The free-space check bypassed (a disk filled by someone else meanwhile): HDF5's own
+    write fails; one error line and exit 1, not a segfault at exit."""
+    small_disk, _ = small_disk
+    script = ("import sys\nfrom icewall.results import writer\n"
+              "writer.ensure_space = lambda *a, **k: None\nfrom icewall.cli import main\n"
+              "sys.argv = ['icewall', *sys.argv[1:]]\nmain()")
+    out = small_disk / "cf4.h5"
+    done = subprocess.run([sys.executable, "-c", script, "run", CF4, *LINEAR, "-q", "-o",
+                           str(out)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 1, done.stderr[-2000:]
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error: ")]
+    assert len(errors) == 1 and errors[0].startswith("error: disk full writing step ")
+    assert f" to {out}.partial (" in errors[0]
+    assert not list(small_disk.glob("*.tmp")) and not (small_disk / "cf4.h5.lock").exists()
 
 
 def test_checkpoint_write_failing_with_enospc(tmp_path, monkeypatch):
