@@ -112,6 +112,11 @@ def resume_point(loaded: LoadedDeck, path: Path) -> ResumePoint:
         if res.deck_text != loaded.text or overrides != list(loaded.overrides):
             raise ResultError(f"cannot resume {partial}: it was run with another deck text or "
                               f"other --set overrides ({overrides}); resume with the same")
+        stamp = json.loads(res.attrs.get("run_stamp", "{}"))
+        if stamp.get("code", code_version()) != code_version():
+            raise ResultError(f"cannot resume {partial}: it was run by other code "
+                              f"({stamp['code']}, this is {code_version()}); run it anew "
+                              f"without --resume")
         n_stored = len(res.history["step"])
         wall = res.history["wall_time"]
     ckpt_file = checkpoint_path(path)

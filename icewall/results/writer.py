@@ -431,7 +431,7 @@ class ResultWriter:
         self._done = True
         try:
             self._close(status, reason)
-            if status == "failed":  # keeps the checkpoint: `icewall run --resume` goes on
+            if status == "failed" or self._broken:  # keeps the checkpoint: `--resume`
                 return self.partial_path
             remove_checkpoint(checkpoint_path(self.path))
             os.replace(self.partial_path, self.path)  # replaces a link, never writes through

@@ -118,3 +118,4 @@ def test_checkpoint_write_failing_with_enospc(tmp_path, monkeypatch):
         write_checkpoint(path, {"u": np.ones(3), "step": 2})
     assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
     assert int(read_checkpoint(path)["step"]) == 1
+

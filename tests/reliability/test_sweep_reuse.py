@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
 
 import h5py
@@ -75,3 +76,18 @@ def test_edited_deck_and_missing_stamp_are_rerun(tmp_path):
         f.attrs["sweep_overrides"] = json.dumps(LIN)  # an old sweep's stamp is not enough
     assert reuse_verdict(_job(tmp_path)) == (None, "the earlier result has no run stamp")
     assert sweep_module.finished_status(_job(tmp_path)) is None
+
+
+def test_resume_refuses_a_run_of_other_code(tmp_path, monkeypatch):
+    """--resume ends with the result an uninterrupted run gives: only with the same code."""
+    import icewall.pipeline
+    from icewall.deck.load import load_deck
+    from icewall.errors import ResultError
+
+    out = tmp_path / "cf4.h5"
+    loaded = load_deck(CF4, ["analysis.solver=linear", "loads.control.target=1"])
+    icewall.pipeline.run_deck(loaded, out)
+    os.replace(out, str(out) + ".partial")  # as if interrupted
+    monkeypatch.setattr(icewall.pipeline, "code_version", lambda: "0.0.0+other")
+    with pytest.raises(ResultError, match="it was run by other code"):
+        icewall.pipeline.run_deck(loaded, out, resume=True)
