@@ -150,7 +150,8 @@ def mesh(deck: str, overrides: tuple[str, ...], out_dir: str, formats: str) -> N
 @click.argument("deck", type=click.Path(dir_okay=False))
 @click.option("--set", "overrides", multiple=True, help=SET_HELP)
 @click.option("-o", "--output", type=click.Path(), default=None,
-              help="Result file (.h5) or directory [default: outputs.directory of the deck].")
+              help="Result file (.h5, .hdf5, .he5, .hdf, any case) or directory [default: "
+                   "outputs.directory of the deck].")
 @click.option("-q", "--quiet", is_flag=True, help="No progress output.")
 @click.option("--resume", is_flag=True,
               help="Go on with the interrupted run of DECK (same deck, --set and output) from "

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import json
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -16,7 +19,14 @@ from icewall.errors import ResultError
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
 from icewall.results.checkpoint import checkpoint_path, read_checkpoint
-from icewall.results.writer import PARTIAL_SUFFIX, ResultWriter, StepRecord, check_writable
+from icewall.results.output_safety import OutputLock
+from icewall.results.writer import (
+    PARTIAL_SUFFIX,
+    ResultWriter,
+    StepRecord,
+    check_writable,
+    refuse_output_links,
+)
 from icewall.solve.linear_static import run_linear
 
 
@@ -34,13 +44,48 @@ class RunReport:
     reason: str = ""
 
 
+HDF5_SUFFIXES = (".h5", ".hdf5", ".he5", ".hdf")
+"""An output path ending in one of these (any case) is the result file, never a directory."""
+
+
+def result_stem(loaded: LoadedDeck) -> str:
+    """File name stem of a deck's result: the specimen name, lower case, with '/', '\\',
+    blanks and control characters as '_' and no leading dot; the deck file's stem where that
+    leaves nothing (an empty name must not write a hidden '.h5')."""
+    def clean(text: str) -> str:
+        text = "".join("_" if c in "/\\ " or not c.isprintable() else c for c in text)
+        return text.lstrip(".").lower()
+
+    return clean(loaded.deck.specimen.name) or clean(Path(loaded.path).stem) or "result"
+
+
 def result_path(loaded: LoadedDeck, output: str | Path | None = None) -> Path:
-    """Where a deck's result goes: `output` (file or directory) or outputs.directory."""
-    name = loaded.deck.specimen.name.replace("/", "_").replace(" ", "_").lower()
+    """Where a deck's result goes: `output` (a file if it ends in an HDF5 suffix, else a
+    directory) or outputs.directory."""
+    name = result_stem(loaded)
     if output is None:
         return Path(loaded.deck.outputs.directory) / f"{name}.h5"
     output = Path(output)
-    return output / f"{name}.h5" if output.suffix != ".h5" else output
+    return output if output.suffix.lower() in HDF5_SUFFIXES else output / f"{name}.h5"
+
+
+@functools.cache
+def code_version() -> str:
+    """icewall's version and a digest of its Python sources: two runs with the same value ran
+    the same code."""
+    root = Path(__file__).resolve().parent
+    digest = hashlib.sha256()
+    for source in sorted(root.rglob("*.py")):
+        digest.update(source.relative_to(root).as_posix().encode() + b"\0")
+        digest.update(source.read_bytes())
+    return f"{__version__}+{digest.hexdigest()[:12]}"
+
+
+def run_stamp(deck_text: str, overrides) -> str:
+    """What makes a run the same run: deck text, --set overrides and code (JSON, stored as
+    the result's `run_stamp` attribute; a sweep reuses a result only if it matches)."""
+    return json.dumps({"deck_sha256": hashlib.sha256(deck_text.encode()).hexdigest(),
+                       "overrides": list(overrides), "code": code_version()})
 
 
 @dataclass(frozen=True)
@@ -67,13 +112,16 @@ def resume_point(loaded: LoadedDeck, path: Path) -> ResumePoint:
         if res.deck_text != loaded.text or overrides != list(loaded.overrides):
             raise ResultError(f"cannot resume {partial}: it was run with another deck text or "
                               f"other --set overrides ({overrides}); resume with the same")
+        stamp = json.loads(res.attrs.get("run_stamp", "{}"))
+        if stamp.get("code", code_version()) != code_version():
+            raise ResultError(f"cannot resume {partial}: it was run by other code "
+                              f"({stamp['code']}, this is {code_version()}); run it anew "
+                              f"without --resume")
         n_stored = len(res.history["step"])
         wall = res.history["wall_time"]
     ckpt_file = checkpoint_path(path)
-    if not Path(ckpt_file).exists():
-        if n_stored and loaded.deck.analysis.solver != "linear":
-            raise ResultError(f"cannot resume {partial}: its checkpoint {ckpt_file} is missing")
-        return ResumePoint(None, 0, 0.0)
+    if not Path(ckpt_file).exists():  # linear, or stopped before its first checkpoint
+        return ResumePoint(None, 0, 0.0)  # (e.g. a full disk): start the run again
     checkpoint = read_checkpoint(ckpt_file)
     n_steps = int(checkpoint["step"])  # == n_stored, or one less if killed in between
     if n_steps > n_stored:
@@ -83,18 +131,35 @@ def resume_point(loaded: LoadedDeck, path: Path) -> ResumePoint:
 
 
 def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
-             progress: Callable[[str], None] | None = None, resume: bool = False) -> RunReport:
+             progress: Callable[[str], None] | None = None, resume: bool = False,
+             replace: bool = False, attrs: dict[str, str | float | int] | None = None
+             ) -> RunReport:
     """Run one deck and write its HDF5 result; returns where and how long. `resume` goes on
-    with the interrupted run of the same deck at the same path from its last checkpoint."""
-    deck = loaded.deck
-    say = progress or (lambda message: None)
+    with the interrupted run of the same deck at the same path from its last checkpoint;
+    `replace` removes an earlier result at the path first; `attrs` are stored with the run's.
+    The output's lock is held from before anything is written until the result is in place:
+    a second run on the same output is refused (ResultError) and touches nothing."""
     path = result_path(loaded, output)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ResultError(f"cannot create the output directory {path.parent}: {exc}") from None
     check_writable(path)  # before any computing
+    with OutputLock(path) as lock:
+        refuse_output_links(str(path))
+        if replace and path.exists():
+            os.remove(path)  # a rerun: no stale result if this one fails
+        return _run_locked(loaded, path, lock, progress, resume, attrs or {})
+
+
+def _run_locked(loaded: LoadedDeck, path: Path, lock: OutputLock,
+                progress: Callable[[str], None] | None, resume: bool, extra: dict
+                ) -> RunReport:
+    deck = loaded.deck
+    say = progress or (lambda message: None)
     restart = resume_point(loaded, path) if resume else None
+    if restart is not None and restart.checkpoint is None and deck.analysis.solver != "linear":
+        say("no checkpoint: the run starts again from its first step")
     timings: dict[str, float] = {}
     start = time.perf_counter()
     mesh = build_mesh(deck)
@@ -113,12 +178,13 @@ def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
              "load_measure": model.measure_name, "load_unit": model.measure_unit,
              "icewall_version": __version__,
              "deck_overrides": json.dumps(list(loaded.overrides)),
-             "warnings": json.dumps(warnings)}
+             "run_stamp": run_stamp(loaded.text, loaded.overrides),
+             "warnings": json.dumps(warnings), **extra}
     if restart is None or restart.checkpoint is None:
         writer = ResultWriter(path, deck_text=loaded.text, deck_path=loaded.path, mesh=mesh,
-                              attrs=attrs)
+                              attrs=attrs, lock=lock)
     else:
-        writer = ResultWriter.reopen(path, restart.n_steps)
+        writer = ResultWriter.reopen(path, restart.n_steps, lock=lock)
         say(f"resuming after step {restart.n_steps}")
     with writer:
         if deck.analysis.solver == "linear":

@@ -8,10 +8,14 @@ and is not part of the run name. A sweep file (YAML) holds the same: `decks: [pa
 the file]`, `vary: {key.path: [values]}`, `fixed: {key.path: value}`. A run is named
 `<deck stem>__<key>=<value>...` (varied keys only) and writes `OUTDIR/<name>.h5`.
 
-A run whose final file exists with status completed or stopped, made from the same deck text
-and overrides (stamped in the file's `sweep_overrides` attribute), is skipped unless `force`; a
-`.partial` left by a crash is rerun. Runs go to a local process pool, or with `scheduler` to an
-existing Dask distributed cluster (paths must then be valid on the workers: a shared filesystem).
+A run whose final file exists with status completed or stopped and whose `run_stamp` (deck
+text, overrides and code version; every `icewall run` stores it) is this job's is skipped unless
+`force`; any other file at its path (another deck, other overrides, other code, no stamp) is
+rerun, as is a `.partial` left by a crash. Each run holds its output's lock: a rerun while an
+orphaned worker still writes that output fails that job and touches nothing. Workers die with
+the sweep (SIGKILL included); SIGTERM or Ctrl-C writes the table of the runs finished so far.
+Runs go to a local process pool, or with `scheduler` to an existing Dask distributed cluster
+(paths must then be valid on the workers: a shared filesystem).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from pathlib import Path
 
 import yaml
 
-from icewall.errors import DeckError, IcewallError, ResultError
+from icewall.errors import DeckError, IcewallError, Interrupted, ResultError
 
 FINISHED = ("completed", "stopped")
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
@@ -204,47 +208,67 @@ def with_realizations(jobs: list[Job], realizations: int) -> list[Job]:
     return out
 
 
-def finished_status(job: Job) -> str | None:
-    """Status of an earlier run of `job` that can be skipped (completed/stopped), else None."""
+def reuse_verdict(job: Job) -> tuple[str | None, str]:
+    """(status, "") of an earlier run of `job` that can be skipped (completed/stopped), else
+    (None, why it is rerun; "" where there is no result). Same run: same `run_stamp`."""
+    from icewall.pipeline import run_stamp
     from icewall.results.reader import open_result
 
-    if not os.path.exists(job.output):
-        return None
+    if not os.path.lexists(job.output):
+        return None, ""
     try:
         with open_result(job.output) as res:
-            status, stamp, text = res.status, res.attrs.get("sweep_overrides"), res.deck_text
-        same_deck = Path(job.deck).read_text() == text
+            status, stamp = res.status, res.attrs.get("run_stamp")
+        text = Path(job.deck).read_text(encoding="utf-8")
     except (ResultError, OSError, UnicodeDecodeError):
-        return None
-    if not same_deck or (stamp is not None and json.loads(stamp) != list(job.overrides)):
-        return None  # the deck was edited since, or the run was made with other overrides
-    return status if status in FINISHED else None
+        return None, "the earlier result is unreadable"
+    if stamp is None:
+        return None, "the earlier result has no run stamp"
+    try:
+        theirs, ours = json.loads(stamp), json.loads(run_stamp(text, job.overrides))
+    except (TypeError, ValueError):
+        return None, "the earlier result's run stamp is damaged"
+    differs = [what for key, what in (("deck_sha256", "deck text"), ("overrides", "overrides"),
+                                      ("code", "code version"))
+               if not isinstance(theirs, dict) or theirs.get(key) != ours[key]]
+    if differs:
+        return None, f"the earlier result differs in {', '.join(differs)}"
+    return (status, "") if status in FINISHED else (None, f"the earlier run {status}")
+
+
+def finished_status(job: Job) -> str | None:
+    """Status of an earlier run of `job` that can be skipped (completed/stopped), else None."""
+    return reuse_verdict(job)[0]
+
+
+_RUN_IN_PROGRESS = False  # in a worker: whether run_job is running (SIGTERM interrupts it)
+_STOPPING = False  # in a worker: SIGTERM came; the worker ends once its run is closed
 
 
 def run_job(job: Job) -> dict:
     """Run one job (in a worker); never raises: a failure is a result with status failed."""
+    global _RUN_IN_PROGRESS
     start = time.perf_counter()
     out = {"name": job.name, "path": job.output, "status": "failed", "reason": "",
            "run_time_s": 0.0, "n_steps": 0}
+    _RUN_IN_PROGRESS = True
     try:
-        import h5py
-
         from icewall.deck.load import load_deck
         from icewall.pipeline import run_deck
 
-        if os.path.exists(job.output):  # a rerun: no stale result if this one fails
-            os.remove(job.output)
         loaded = load_deck(job.deck, job.overrides)
-        report = run_deck(loaded, job.output, progress=None)
-        if report.status in FINISHED:
-            with h5py.File(report.path, "a") as f:
-                f.attrs["sweep_overrides"] = json.dumps(list(job.overrides))
+        report = run_deck(loaded, job.output, progress=None, replace=True,
+                          attrs={"sweep_overrides": json.dumps(list(job.overrides))})
         out.update(path=report.path, status=report.status, reason=report.reason,
                    n_steps=report.n_steps)
     except IcewallError as exc:
         out["reason"] = str(exc)
     except Exception as exc:  # noqa: BLE001 - any failure is this job's, the sweep goes on
         out["reason"] = f"{type(exc).__name__}: {exc}"
+    finally:
+        _RUN_IN_PROGRESS = False
+        if _STOPPING:  # the sweep is stopping: its table lists only finished runs
+            os._exit(143)
     out["run_time_s"] = time.perf_counter() - start
     return out
 
@@ -252,6 +276,48 @@ def run_job(job: Job) -> dict:
 def _failed(job: Job, reason: str) -> dict:
     return {"name": job.name, "path": job.output, "status": "failed", "reason": reason,
             "run_time_s": 0.0, "n_steps": 0}
+
+
+def _die_with(sweep_pid: int) -> None:
+    """Worker initializer: the worker dies with the sweep, however the sweep ends, and SIGTERM
+    interrupts its run as in `icewall run` (the writer records why and keeps the steps)."""
+    import signal
+    import sys
+    import threading
+
+    def interrupted(signum, frame) -> None:
+        global _STOPPING
+        if not _RUN_IN_PROGRESS:  # an idle worker just ends
+            os._exit(128 + signum)
+        if _STOPPING:  # a repeated signal: let the run close its file first
+            return
+        _STOPPING = True
+        raise Interrupted(signal.Signals(signum).name, 128 + signum)
+
+    signal.signal(signal.SIGTERM, interrupted)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the sweep's to handle
+    parent = os.getppid()
+    if sys.platform.startswith("linux"):  # the parent (the sweep or its forkserver) dies
+        import ctypes
+
+        pr_set_pdeathsig = 1
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
+
+    def watch() -> None:  # also where prctl is missing, or the parent died before it
+        while True:
+            try:
+                os.kill(sweep_pid, 0)
+                alive = os.getppid() == parent
+            except ProcessLookupError:
+                alive = False
+            except PermissionError:
+                alive = True
+            if not alive:
+                os.kill(os.getpid(), signal.SIGKILL)
+            time.sleep(0.5)
+
+    threading.Thread(target=watch, name="icewall-sweep-watch", daemon=True).start()
 
 
 def _pool(workers: int):
@@ -262,7 +328,15 @@ def _pool(workers: int):
     ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
     if ctx.get_start_method() == "forkserver":
         ctx.set_forkserver_preload(["icewall.pipeline"])
-    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_die_with,
+                               initargs=(os.getpid(),))
+
+
+def _stop_workers(workers) -> None:
+    """SIGTERM a pool's workers: each run records the interruption and keeps its steps."""
+    for process in workers:
+        if process.is_alive():
+            process.terminate()
 
 
 def run_local(jobs: list[Job], workers: int, done: Callable[[dict], None],
@@ -284,8 +358,10 @@ def run_local(jobs: list[Job], workers: int, done: Callable[[dict], None],
                     suspects.append(futures[future])
                 except Exception as exc:  # noqa: BLE001
                     done(_failed(futures[future], f"{type(exc).__name__}: {exc}"))
-        except BaseException:  # Ctrl-C: start no more runs
+        except BaseException:  # Ctrl-C, SIGTERM: start no more runs, stop the running ones
+            workers = list((getattr(pool, "_processes", None) or {}).values())
             pool.shutdown(wait=False, cancel_futures=True)
+            _stop_workers(workers)
             raise
     if suspects:
         from concurrent.futures import ThreadPoolExecutor
@@ -367,9 +443,11 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
     todo = []
     width = max(len(job.name) for job in jobs)
     for job in jobs:
-        status = None if force else finished_status(job)
+        status, why = (None, "") if force else reuse_verdict(job)
         if status is None:
             todo.append(job)
+            if why:
+                say(f"{job.name}: rerun: {why}")
             continue
         results[job.name] = {"name": job.name, "path": job.output, "status": status}
         say(f"[{len(results)}/{len(jobs)}] {job.name:<{width}}  skipped ({status} earlier)")
@@ -382,10 +460,18 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
             f"  {result['run_time_s']:.1f} s{reason}")
 
     start = time.perf_counter()
-    if todo and scheduler:
-        run_dask(todo, scheduler, done)
-    elif todo:
-        run_local(todo, workers or os.cpu_count() or 1, done)
+    try:
+        if todo and scheduler:
+            run_dask(todo, scheduler, done)
+        elif todo:
+            run_local(todo, workers or os.cpu_count() or 1, done)
+    except (Interrupted, KeyboardInterrupt):  # the table of what finished, then exit 143/130
+        finished = [job for job in jobs if job.name in results]
+        rows = build_rows(finished, results)
+        table = os.path.join(outdir, "sweep_summary.csv")
+        write_csv(table, rows, ratio_stats(rows))
+        echo(f"interrupted: {len(finished)} of {len(jobs)} runs in the table {table}")
+        raise
     rows = build_rows(jobs, results)
     stats = ratio_stats(rows)
     table = os.path.join(outdir, "sweep_summary.csv")

@@ -13,6 +13,7 @@ import zipfile
 import numpy as np
 
 from icewall.errors import ResultError
+from icewall.results.output_safety import DiskFullError, ensure_space, is_disk_full, refuse_symlink
 
 CHECKPOINT_SUFFIX = ".checkpoint.npz"
 
@@ -23,12 +24,34 @@ def checkpoint_path(result_path: str | os.PathLike) -> str:
 
 
 def write_checkpoint(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -> None:
-    """Replace the checkpoint at `path` by `arrays` (names may contain '/')."""
+    """Replace the checkpoint at `path` by `arrays` (names may contain '/'). The temporary is
+    created exclusively and never through a link; on a full disk it is removed, the previous
+    checkpoint stays and DiskFullError is raised."""
     path = os.fspath(path)
     tmp = path + ".tmp"
-    with open(tmp, "wb") as fh:
-        np.savez(fh, **{name: np.asarray(a) for name, a in arrays.items()})
-    os.replace(tmp, path)
+    arrays = {name: np.asarray(a) for name, a in arrays.items()}
+    refuse_symlink(path, "checkpoint")
+    ensure_space(path, sum(a.nbytes for a in arrays.values()) + 64 * 1024, "the checkpoint")
+    remove_checkpoint_temporary(tmp)
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
+    try:
+        with os.fdopen(os.open(tmp, flags, 0o644), "wb") as fh:
+            np.savez(fh, **arrays)
+        os.replace(tmp, path)
+    except OSError as exc:
+        remove_checkpoint_temporary(tmp)
+        if is_disk_full(exc):
+            raise DiskFullError(f"disk full writing the checkpoint {path}: {exc.strerror}"
+                                ) from None
+        raise ResultError(f"cannot write the checkpoint {path}: {exc}") from None
+
+
+def remove_checkpoint_temporary(tmp: str) -> None:
+    """Remove a half-written checkpoint temporary (a link is removed, never followed)."""
+    try:
+        os.remove(tmp)
+    except FileNotFoundError:
+        pass
 
 
 def read_checkpoint(path: str | os.PathLike) -> dict[str, np.ndarray]:

@@ -4,12 +4,17 @@ The file is written as ``<path>.partial`` and flushed after every step, so a kil
 readable file with every finished step; ``finish()`` renames it to ``<path>``. Beside it,
 ``write_checkpoint`` keeps the solver state of the last step (``<path>.checkpoint.npz``) until the
 run finishes, and ``reopen`` goes on writing an interrupted run (``icewall run --resume``).
+A writer holds the output's lock (``<path>.lock``, results/output_safety.py) from before the
+``.partial`` is created (exclusively, never through a link) until it is closed, and checks the
+free space before every step: a full disk stops it with DiskFullError, every converged step kept.
 """
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from datetime import datetime
@@ -22,6 +27,13 @@ import icewall
 from icewall.errors import ResultError
 from icewall.mesh.mesh import Mesh
 from icewall.results.checkpoint import checkpoint_path, remove_checkpoint, write_checkpoint
+from icewall.results.output_safety import (
+    DiskFullError,
+    OutputLock,
+    ensure_space,
+    is_disk_full,
+    refuse_symlink,
+)
 
 FORMAT, FORMAT_VERSION = "icewall-result", 1
 PARTIAL_SUFFIX = ".partial"
@@ -134,13 +146,47 @@ def check_writable(path: str | os.PathLike) -> None:
         raise ResultError(f"cannot write results to {path}: {why}")
 
 
+def _exit_without_hdf5_shutdown() -> None:
+    """atexit hook once an HDF5 write failed: HDF5 crashes (SIGSEGV) closing that file at
+    exit, so end the process here with exit code 1, after flushing the output streams."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(DiskFullError.exit_code)
+
+
+def refuse_output_links(path: str) -> None:
+    """ResultError if the final, ``.partial`` or checkpoint path of `path` is a symbolic link."""
+    refuse_symlink(path, "result")
+    refuse_symlink(path + PARTIAL_SUFFIX, "partial result")
+    refuse_symlink(checkpoint_path(path), "checkpoint")
+
+
+def _take_lock(path: str, lock: OutputLock | None) -> tuple[OutputLock, bool]:
+    """The caller's lock of `path` (held), or a new one taken here (owned by the writer)."""
+    if lock is not None:
+        if not lock.held or lock.result_path != path:
+            raise ValueError(f"the lock given is not a held lock of {path}")
+        return lock, False
+    return OutputLock(path).acquire(), True
+
+
+def _mesh_bytes(mesh: Mesh) -> int:
+    arrays = (mesh.points, mesh.cells, mesh.cell_region, mesh.interface_pairs)
+    return sum(np.asarray(a).nbytes for a in arrays) + 256 * 1024
+
+
 class ResultWriter:
     """Context manager writing one analysis; see the module docstring and docs/hdf5_layout.md."""
 
     def __init__(self, path: str | os.PathLike, *, deck_text: str, deck_path: str, mesh: Mesh,
-                 attrs: dict[str, str | float | int] | None = None) -> None:
+                 attrs: dict[str, str | float | int] | None = None,
+                 lock: OutputLock | None = None) -> None:
         self.path = os.fspath(path)
         self.partial_path = self.path + PARTIAL_SUFFIX
+        self._broken = False
         attrs = dict(attrs or {})
         for key, val in attrs.items():
             _check_name(key, "attribute")
@@ -149,39 +195,74 @@ class ResultWriter:
             if not isinstance(val, str):
                 attrs[key] = _scalar(f"attrs[{key!r}]", val)
         check_writable(self.path)
+        self._lock, self._own_lock = _take_lock(self.path, lock)
         try:
-            self._f = h5py.File(self.partial_path, "w")
-        except OSError as exc:
-            raise ResultError(f"cannot create result file {self.partial_path}: {exc}") from exc
+            self._f = self._create_partial(_mesh_bytes(mesh) + len(deck_text.encode()))
+        except BaseException:
+            self._release()
+            raise
         self._t0, self._n, self._last_step, self._done = time.perf_counter(), 0, 0, False
         self._n_nodes, self._n_cells = mesh.n_nodes, mesh.n_cells
         self._columns: dict[str, bool] = {}  # extra history column -> is integer
         try:
             self._init_file(deck_text, deck_path, mesh, attrs)
-        except BaseException:
+        except BaseException as exc:
             self._f.close()
             os.remove(self.partial_path)
+            self._release()
+            if isinstance(exc, OSError | RuntimeError) and is_disk_full(exc):
+                raise DiskFullError(f"disk full creating {self.partial_path}") from None
             raise
         remove_checkpoint(checkpoint_path(self.path))  # a stale one of an earlier run
 
+    def _create_partial(self, size: int) -> h5py.File:
+        """Create the ``.partial`` exclusively (the lock is held: a leftover one is a dead
+        run's and is removed first; a link is refused, never followed)."""
+        refuse_output_links(self.path)
+        ensure_space(self.partial_path, size, "the new result file")
+        if os.path.lexists(self.partial_path):
+            os.remove(self.partial_path)
+        try:
+            return h5py.File(self.partial_path, "x")
+        except OSError as exc:
+            if is_disk_full(exc):
+                raise DiskFullError(f"disk full creating {self.partial_path}") from None
+            raise ResultError(f"cannot create result file {self.partial_path}: {exc}") from None
+
     @classmethod
-    def reopen(cls, path: str | os.PathLike, n_steps: int) -> ResultWriter:
+    def reopen(cls, path: str | os.PathLike, n_steps: int,
+               lock: OutputLock | None = None) -> ResultWriter:
         """Go on writing the ``.partial`` of an interrupted run after its first `n_steps`
         history entries; whatever it holds beyond them (a step cut short) is dropped."""
         self = cls.__new__(cls)
         self.path = os.fspath(path)
         self.partial_path = self.path + PARTIAL_SUFFIX
+        self._broken = False
         check_writable(self.path)
+        self._lock, self._own_lock = _take_lock(self.path, lock)
         try:
+            refuse_output_links(self.path)
+            if os.path.exists(self.partial_path) and os.lstat(self.partial_path).st_nlink > 1:
+                raise ResultError(f"refusing to resume {self.partial_path}: it is a hard link "
+                                  f"to another file")
             self._f = h5py.File(self.partial_path, "a")
         except OSError as exc:
+            self._release()
             raise ResultError(f"cannot reopen {self.partial_path}: {exc}") from None
+        except BaseException:
+            self._release()
+            raise
         try:
             self._truncate(n_steps)
         except BaseException:
             self._f.close()
+            self._release()
             raise
         return self
+
+    def _release(self) -> None:
+        if self._own_lock:
+            self._lock.release()
 
     def _truncate(self, n_steps: int) -> None:
         f = self._f
@@ -270,7 +351,31 @@ class ResultWriter:
         """Validate the whole record (ValueError names the bad field), then append and flush."""
         if self._done:
             raise RuntimeError("write_step() after finish()")
+        if self._broken:
+            raise ResultError(f"{self.partial_path}: an earlier write failed")
         core, arrays, extra, forensics = self._validate(record)
+        need = sum(a.nbytes for a in (*arrays.values(), *forensics.values()))
+        need += 4096 * (len(arrays) + len(forensics) + len(extra) + len(CORE_COLUMNS))
+        try:
+            ensure_space(self.partial_path, need, f"step {core['step']}")
+        except DiskFullError as exc:
+            raise DiskFullError(f"{exc}; the {self._n} converged steps are kept in "
+                                f"{self.partial_path}; free space, then run again with "
+                                f"--resume") from None
+        kept = self._n
+        try:
+            self._append(core, arrays, extra, forensics)
+        except (OSError, RuntimeError) as exc:
+            self._broken = True  # HDF5 cannot write this file any more
+            atexit.register(_exit_without_hdf5_shutdown)
+            if is_disk_full(exc):
+                raise DiskFullError(f"disk full writing step {core['step']} to "
+                                    f"{self.partial_path} ({kept} steps written before it; "
+                                    f"the file may be damaged)") from None
+            raise ResultError(f"cannot write step {core['step']} to {self.partial_path}: "
+                              f"{exc}") from None
+
+    def _append(self, core: dict, arrays: dict, extra: dict, forensics: dict) -> None:
         f, n = self._f, self._n
         if forensics:
             g = f.require_group("forensics").create_group(f"{core['step']:05d}")
@@ -325,16 +430,24 @@ class ResultWriter:
             raise RuntimeError("finish() called twice")
         self._done = True
         try:
+            self._close(status, reason)
+            if status == "failed" or self._broken:  # keeps the checkpoint: `--resume`
+                return self.partial_path
+            remove_checkpoint(checkpoint_path(self.path))
+            os.replace(self.partial_path, self.path)  # replaces a link, never writes through
+            return self.path
+        finally:
+            self._release()
+
+    def _close(self, status: str, reason: str) -> None:
+        if self._broken:  # closing would crash HDF5; the file keeps its last flushed state
+            return
+        try:
             self._f.attrs.update({"status": status, "stop_reason": str(reason),
                                   "run_time_s": time.perf_counter() - self._t0,
                                   "n_steps": self._n})
         finally:
             self._f.close()
-        if status == "failed":  # keeps the checkpoint: `icewall run --resume` goes on from it
-            return self.partial_path
-        remove_checkpoint(checkpoint_path(self.path))
-        os.replace(self.partial_path, self.path)
-        return self.path
 
     def __enter__(self) -> ResultWriter:
         return self
