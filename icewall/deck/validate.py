@@ -148,14 +148,10 @@ def _check_preload(deck: Deck, fail: ErrorFactory) -> None:
 
 
 def _check_fixed_points(deck: Deck, fail: ErrorFactory) -> None:
-    from icewall.interface.gap import FIXED_POINT_PLACEMENTS, PLACEMENTS_WIRED
+    from icewall.interface.gap import FIXED_POINT_PLACEMENTS
 
     key = "materials.interface.fixed_point_placement"
     for i, where in enumerate(deck.materials.interface.fixed_point_placement):
         if where not in FIXED_POINT_PLACEMENTS:
             raise fail(f"unknown fixed-point placement {where!r} (one of "
                        f"{', '.join(FIXED_POINT_PLACEMENTS)})", f"{key}[{i}]")
-        if where not in PLACEMENTS_WIRED:
-            raise fail(f"fixed-point placement {where!r} is not passed to the solver yet "
-                       f"(issue 19 wires it; today: {', '.join(PLACEMENTS_WIRED)})",
-                       f"{key}[{i}]")

@@ -197,10 +197,6 @@ def friction_work_increment(state_old: GapState, state_new: GapState) -> float:
 
 
 FIXED_POINT_PLACEMENTS = ("top", "corners", "bottom_support")
-# Placements the current solver passes on: icewall.solve.gap_constraints calls
-# choose_fixed_points(mesh, per_core) (top face only). The solver of issue 19 is to call
-# fixed_point_mask(mesh, interface) instead and list every placement here.
-PLACEMENTS_WIRED = ("top",)
 
 
 def fixed_point_mask(mesh: Mesh, interface) -> np.ndarray | None:

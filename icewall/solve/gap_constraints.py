@@ -22,9 +22,9 @@ from icewall.interface.augmented import (
 )
 from icewall.interface.gap import (
     GapState,
-    choose_fixed_points,
     constraint_matrix,
     count_states,
+    fixed_point_mask,
     friction_work_increment,
     new_step,
     relative_displacement,
@@ -50,8 +50,7 @@ class GapConstraints(SupportConstraints):
         self.reverse_slip = {"stick": "stick", "reverse": True, "none": False}[
             interface.slip_reversal]
         self.implicit_slip = interface.friction_update == "implicit"
-        permanent = (choose_fixed_points(mesh, per_core=interface.fixed_points_per_core)
-                     if interface.fixed_points_per_core else None)
+        permanent = fixed_point_mask(mesh, interface)
         # Constraint rows acting only on supported equations (e.g. the tangential row of a pair
         # on the symmetry line, where both nodes have u_x = 0) are redundant: their multiplier
         # stays zero (an identity row while the row is active).
