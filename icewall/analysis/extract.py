@@ -193,18 +193,17 @@ def _tension_plate(hist: dict, fields: dict, peak_step: int) -> tuple[dict | Non
         else:
             verdict = "undetermined"
         return ev, verdict
-    if "tension_plate_yielded" in hist:
-        ev = _event(hist, "tension_plate_yielded", peak_step)
-        note = "tension_plate_yielded history column (bottom plate Gauss points)"
-        if ev is None:
-            return {"source": note}, "no"
-        return {**ev, "source": note}, "before_peak" if ev["step"] <= peak_step else "after_peak"
-    if "yielded" in hist:
-        ev = _event(hist, "yielded", peak_step)
-        note = "yielded count of all steel regions (no equivalent_plastic_strain field stored)"
-        if ev is None:
-            return {"source": note}, "no"
-        return {**ev, "source": note}, "before_peak" if ev["step"] <= peak_step else "after_peak"
+    for column, note in (
+            ("tension_plate_yielded", "tension_plate_yielded history column (bottom plate "
+             "Gauss points)"),
+            ("yielded", "yielded count of all steel regions (no equivalent_plastic_strain "
+             "field stored)")):
+        if column in hist:
+            ev = _event(hist, column, peak_step)
+            if ev is None:
+                return {"source": note}, "no"
+            return ({**ev, "source": note},
+                    "before_peak" if ev["step"] <= peak_step else "after_peak")
     return None, None
 
 
