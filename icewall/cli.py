@@ -229,10 +229,11 @@ def compare(results_dir: str, baseline_path: str, update: bool, peak_tol: float 
             residual_tol: float | None, band: tuple[float, float] | None) -> None:
     """Compare the results in RESULTS_DIR (an icewall sweep output) with a stored baseline of
     peak and residual loads; exit 1 when a check fails. --update rewrites the baseline."""
-    from icewall.analysis.compare import compare_command
+    from icewall.analysis.compare import FROM_HEADER, compare_command
 
     sys.exit(compare_command(results_dir, baseline_path, update=update, peak_tol=peak_tol,
-                             residual_tol=residual_tol, band=band))
+                             residual_tol=FROM_HEADER if residual_tol is None else residual_tol,
+                             band=band))
 
 
 @main.command()

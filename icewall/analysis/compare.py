@@ -16,14 +16,20 @@ stops changes too. A baseline written with ``realizations: K`` therefore runs ev
 K times (the run itself and K - 1 such perturbations) and stores the band [min, max] that each
 figure spans and the statuses the realizations ended with.
 
-:func:`compare` fails a run when its peak load lies outside its band widened by ``peak_tol``
-(relative; a band of one value where the baseline has none), when its residual load lies
-outside its band widened by ``residual_tol``, when it ends with a status none of the baseline's
-realizations ended with (a run that completed now stops, or the reverse: either way the
-baseline no longer describes the code), when its overrides differ from the baseline's, or when
-it is missing. Over the runs whose specimen has a test value, the mean test/predicted ratio of
-the ultimate load must lie in ``ratio_band``. Runs absent from the baseline are reported
-("new") but do not fail.
+:func:`compare` fails a run when a pre-peak load (the loads at `baseline.CURVE_DEFLECTIONS`,
+where the secant iteration is not yet chaotic in round-off) lies outside its band widened by
+``curve_tol``, when its peak load lies outside its band widened by ``peak_tol`` (relative; a
+band of one value where the baseline has none), when its residual load lies outside its band
+widened by ``residual_tol`` (None: the residual is reported, never gated), when it ends with a
+status none of the baseline's realizations ended with (a run that completed now stops, or the
+reverse: either way the baseline no longer describes the code), when its overrides differ from
+the baseline's, or when it is missing. A figure whose own band spans more than GATE_FRACTION of
+its tolerance is reported, not gated: no tolerance we would want on it holds across platforms
+(issue 18). Over
+the runs whose specimen has a test value, the mean test/predicted ratio of the ultimate load
+must lie in ``ratio_band``. Runs absent from the baseline are reported ("new") but do not fail.
+The CI baseline's bands also span the variants run on other platforms (``--platform DIR``:
+other OPENBLAS_CORETYPE kernels, the other concrete kernel, one thread).
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from icewall.analysis.baseline import (  # noqa: F401  (re-exported: the public names)
+    CURVE_TOL,
     DECKS_DIR,
     NOTE,
     PEAK_TOL,
@@ -57,12 +64,21 @@ from icewall.errors import IcewallError, ResultError
 # sits under that, so that a change which makes the
 # agreement with the tests worse fails even after --update has reset the per-run values; the
 # ceiling leaves room for the fix. The acceptance band (RATIO_BAND) is for `make validate`.
-CI_RATIO_BAND = (0.80, 1.10)
-# The CI tolerance on the residual, beyond the band of the five realizations: a post-peak load
-# is one sample of a distribution that spans up to 2x (README, "Round-off"), and five samples
-# do not bound it (CF-4's load at 15 mm: band 2.04-3.05 MPa, a sixth realization 3.86). The
-# check then catches a post-peak branch that collapses or doubles, not a drift.
-CI_RESIDUAL_TOL = 0.50
+# The CI tolerances (issue 18), written into the header of a rewritten baseline. The bands
+# span the run's round-off realizations and its runs on other platforms (OPENBLAS_CORETYPE
+# Haswell, Sandybridge, Prescott and SkylakeX, the NumPy and numba concrete kernels, one BLAS
+# thread); a figure is gated at its tolerance beyond its band where the band spans at most
+# GATE_FRACTION of it, else reported (compare._value_row). Gated pre-peak loads agree across
+# all of those to 0.3 %; a 3 % change of f'c, of the friction coefficient or of the TF leg
+# width moves some of them by more than 1 % beyond their bands (tests/compare/
+# model_changes.yaml). The secant iteration's post-peak path moves by up to 2x with the
+# platform, so the residual is reported, never gated, until the solver converges it.
+CI_TOLERANCES = {"peak_tol": 0.03, "curve_tol": 0.01, "residual_tol": None,
+                 "band": (0.80, 1.10)}
+# A figure is gated only where its band spans at most this fraction of its tolerance: a band
+# of ten realizations that already spans nearly the tolerance does not bound the next platform.
+GATE_FRACTION = 0.5
+FROM_HEADER = "from the baseline's header"  # compare_command: a tolerance the header gives
 BASELINE_CI = Path(__file__).resolve().parents[2] / "tests" / "compare" / "baseline_ci.yaml"
 # CI variants of the eight analysed decks: the shipped deck (50 mm elements, 1 mm increments)
 # ended a little past its peak (the CF walls peak at 7-13 mm, TF at 3-5, VTT3 at 6) and with
@@ -91,7 +107,8 @@ class Row:
 class CompareReport:
     rows: list[Row] = field(default_factory=list)
     peak_tol: float = PEAK_TOL
-    residual_tol: float = RESIDUAL_TOL
+    residual_tol: float | None = RESIDUAL_TOL  # None: the residual is reported, not gated
+    curve_tol: float = CURVE_TOL
     ratio_band: tuple[float, float] = RATIO_BAND
     ratio_now: float | None = None
     ratio_baseline: float | None = None
@@ -131,21 +148,32 @@ def _value_row(run: str, quantity: str, base, now, tol: float, band=None,
     below, above = _relative(lo, now), _relative(hi, now)
     change = below if below < 0 else above if above > 0 else 0.0  # from the nearer band edge
     where = f"band [{lo:.5g}, {hi:.5g}]" if hi > lo else ""
+    if tol is None:
+        return Row(run, quantity, base, now, change, "info",
+                   "reported, not gated" + (f" ({where})" if where else ""))
+    spread = _relative(lo, hi) if lo > 0 else 0.0
+    if spread > GATE_FRACTION * tol:  # its own round-off/platform band is too wide to gate
+        return Row(run, quantity, base, now, change, "info",
+                   f"reported, not gated: its realizations span {spread:.1%} > "
+                   f"{GATE_FRACTION:g} x {tol:.1%}")
     if abs(change) > tol:
         return Row(run, quantity, base, now, change, "FAIL",
                    f"moved more than {tol:.0%}" + (f" outside its {where}" if where else ""))
     return Row(run, quantity, base, now, change, "ok", f"in {where}" if where else "")
 
 
-def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float = RESIDUAL_TOL,
-            ratio_band: tuple[float, float] = RATIO_BAND) -> CompareReport:
+def compare(results, baseline, peak_tol: float = PEAK_TOL,
+            residual_tol: float | None = RESIDUAL_TOL,
+            ratio_band: tuple[float, float] = RATIO_BAND,
+            curve_tol: float = CURVE_TOL) -> CompareReport:
     """Compare `results` (a sweep output directory, a list of .h5 files, or measured records
     {name: record}) with `baseline` (a file path or its data). Rules: module docstring."""
     base = baseline if isinstance(baseline, Mapping) else read_baseline(baseline)
     base_runs: dict = base.get("runs") or {}
     now_runs = measure_results(results)
     lo, hi = float(ratio_band[0]), float(ratio_band[1])
-    report = CompareReport(peak_tol=peak_tol, residual_tol=residual_tol, ratio_band=(lo, hi))
+    report = CompareReport(peak_tol=peak_tol, residual_tol=residual_tol, curve_tol=curve_tol,
+                           ratio_band=(lo, hi))
     for name in sorted(set(base_runs) | set(now_runs)):
         b, n = base_runs.get(name), now_runs.get(name)
         if n is None:
@@ -171,6 +199,7 @@ def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float =
                                    why.get((bs, ns), f"status {bs} -> {ns}")))
         else:
             report.rows.append(Row(name, "status", bs, ns, None, "ok"))
+        report.rows.extend(_curve_rows(name, b, n, curve_tol))
         report.rows.append(_value_row(name, "peak", b.get("peak_load"), n.get("peak_load"),
                                       peak_tol, b.get("peak_band")))
         report.rows.append(Row(name, "defl@peak", b.get("deflection_at_peak"),
@@ -204,6 +233,21 @@ def compare(results, baseline, peak_tol: float = PEAK_TOL, residual_tol: float =
     return report
 
 
+def _curve_rows(name: str, base: dict, now: dict, tol: float) -> list[Row]:
+    """One row per pre-peak deflection of the baseline: the load there against its band."""
+    rows = []
+    points = base.get("curve_deflections") or []
+    loads, bands = base.get("curve_loads") or [], base.get("curve_bands") or []
+    now_points = now.get("curve_deflections") or []
+    now_loads = now.get("curve_loads") or []
+    for k, x in enumerate(points):
+        value = (now_loads[now_points.index(x)]
+                 if x in now_points and now_points.index(x) < len(now_loads) else None)
+        rows.append(_value_row(name, f"load@{x:g}mm", loads[k] if k < len(loads) else None,
+                               value, tol, bands[k] if k < len(bands) else None))
+    return rows
+
+
 def _cell(value) -> str:
     if value is None:
         return "-"
@@ -230,8 +274,11 @@ def format_report(report: CompareReport) -> str:
 
     out = [line(head), line(["-" * w for w in widths]), *(line(c) for c in body)]
     n_fail = len(report.failures)
-    out.append(f"tolerances: peak {report.peak_tol:.0%}, residual {report.residual_tol:.0%} "
-               f"(relative); mean {RATIO_NAME} band [{report.ratio_band[0]:g}, "
+    residual = ("reported only" if report.residual_tol is None
+                else f"{report.residual_tol:.0%}")
+    out.append(f"tolerances: pre-peak loads {report.curve_tol:.1%}, peak {report.peak_tol:.1%}, "
+               f"residual {residual} (relative, beyond the bands); mean {RATIO_NAME} band "
+               f"[{report.ratio_band[0]:g}, "
                f"{report.ratio_band[1]:g}]")
     out.append("PASS" if not n_fail else f"FAIL: {n_fail} check(s) failed")
     return "\n".join(out)
@@ -240,8 +287,9 @@ def format_report(report: CompareReport) -> str:
 # -- the command -------------------------------------------------------------------------------
 def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.PathLike,
                     update: bool = False, peak_tol: float | None = None,
-                    residual_tol: float | None = None,
+                    residual_tol: float | str | None = FROM_HEADER,
                     band: tuple[float, float] | None = None, command: str | None = None,
+                    curve_tol: float | None = None,
                     echo: Callable[[str], None] | None = None,
                     realizations: Mapping[str, list[dict]] | None = None) -> int:
     """Body of `icewall compare RESULTS_DIR --baseline FILE [--update] [--peak-tol F]
@@ -264,14 +312,17 @@ def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.Path
         old = read_baseline(baseline_path)
     stated = (old or {}).get("tolerances") or {}
     peak_tol = float(peak_tol if peak_tol is not None else stated.get("peak", PEAK_TOL))
-    residual_tol = float(residual_tol if residual_tol is not None
-                         else stated.get("residual", RESIDUAL_TOL))
+    curve_tol = float(curve_tol if curve_tol is not None else stated.get("curve", CURVE_TOL))
+    if residual_tol == FROM_HEADER:  # the header's null: the residual is reported, not gated
+        residual_tol = stated["residual"] if "residual" in stated else RESIDUAL_TOL
+    residual_tol = None if residual_tol is None else float(residual_tol)
     band = tuple(band if band is not None else stated.get("ratio_band", RATIO_BAND))
-    if not (peak_tol >= 0 and residual_tol >= 0 and band[0] <= band[1]):
+    if not (peak_tol >= 0 and curve_tol >= 0 and (residual_tol is None or residual_tol >= 0)
+            and band[0] <= band[1]):
         raise IcewallError("tolerances must be >= 0 and the band LO <= HI")
     status = 0
     if old is not None:
-        report = compare(records, old, peak_tol, residual_tol, band)
+        report = compare(records, old, peak_tol, residual_tol, band, curve_tol)
         echo(format_report(report))
         status = 0 if report.passed else 1
     if update:
@@ -282,6 +333,7 @@ def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.Path
             command = "icewall " + " ".join(shlex.quote(a) for a in sys.argv[1:])
         write_baseline(baseline_path, make_baseline(records, command=command, peak_tol=peak_tol,
                                                     residual_tol=residual_tol, ratio_band=band,
+                                                    curve_tol=curve_tol,
                                                     realizations=realizations))
         echo(f"baseline {baseline_path} written: {len(records)} run(s)")
         return 0
@@ -341,15 +393,20 @@ def run_variants(outdir: str | os.PathLike, workers: int | None = None,
 def run_ci_comparison(outdir: str | os.PathLike, baseline: str | os.PathLike = BASELINE_CI,
                       workers: int | None = None, update: bool = False,
                       echo: Callable[[str], None] = print,
-                      realizations: int = REALIZATIONS, **tolerances) -> int:
+                      realizations: int = REALIZATIONS,
+                      platform_dirs: Iterable[str | os.PathLike] = (),
+                      command: str = "python -m icewall.analysis.compare --update",
+                      **tolerances) -> int:
     """Run the CI variants into `outdir` and compare them with `baseline`; with `update`,
     also run `realizations` - 1 round-off realizations of each and rewrite the baseline with
     the bands they span. Returns the exit status of :func:`compare_command`. Only the
-    variants' own result files are compared (the run names of CI_VARIANTS)."""
-    if update and not Path(baseline).exists():  # a new baseline: the CI's own tolerances
-        for key, value in (("band", CI_RATIO_BAND), ("residual_tol", CI_RESIDUAL_TOL)):
-            if tolerances.get(key) is None:
-                tolerances[key] = value
+    variants' own result files are compared (the run names of CI_VARIANTS). With `update`,
+    `platform_dirs` are output directories of the same variants run elsewhere (another
+    OPENBLAS_CORETYPE, the other concrete kernel, other thread counts): their runs join the
+    realizations, so that the bands span the platforms as well as the round-off."""
+    if update:  # a rewritten baseline states the CI's own tolerances (module constants)
+        for key, value in CI_TOLERANCES.items():
+            tolerances.setdefault(key, value)
     results = run_variants(outdir, workers, realizations=realizations if update else 1,
                            echo=echo)
     paths = {r["name"]: r["path"] for r in results if os.path.exists(r["path"])}
@@ -363,9 +420,13 @@ def run_ci_comparison(outdir: str | os.PathLike, baseline: str | os.PathLike = B
         records = measure_results(list(paths.values()))
         groups = {name: [records[realization_name(name, k)] for k in range(realizations)
                          if realization_name(name, k) in records] for name in CI_VARIANTS}
+        for folder in platform_dirs:
+            other = measure_results([Path(folder) / f"{name}.h5" for name in CI_VARIANTS
+                                     if (Path(folder) / f"{name}.h5").exists()])
+            for name, record in other.items():
+                groups[name].append(record)
         measured = {name: records[name] for name in CI_VARIANTS if name in records}
-    return compare_command(measured, baseline, update=update, echo=echo,
-                           command="python -m icewall.analysis.compare --update",
+    return compare_command(measured, baseline, update=update, echo=echo, command=command,
                            realizations=groups, **tolerances)
 
 
@@ -381,9 +442,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--baseline", default=str(BASELINE_CI))
     parser.add_argument("-j", "--workers", type=int, default=None)
     parser.add_argument("--update", action="store_true")
+    parser.add_argument("--platform", action="append", default=[], metavar="DIR",
+                        help="with --update: a directory of the same variants run on other "
+                             "BLAS kernels / concrete kernel / threads, added to the bands")
     args = parser.parse_args(argv)
     try:
-        return run_ci_comparison(args.out, args.baseline, args.workers, args.update)
+        import shlex
+        import sys
+
+        words = sys.argv[1:] if argv is None else argv
+        return run_ci_comparison(args.out, args.baseline, args.workers, args.update,
+                                 platform_dirs=args.platform,
+                                 command=" ".join(["python -m icewall.analysis.compare",
+                                                   *map(shlex.quote, words)]))
     except IcewallError as exc:
         print(f"error: {exc}")
         return getattr(exc, "exit_code", 1)
