@@ -80,3 +80,51 @@ def released_energy(u0: np.ndarray, P0: float, u: np.ndarray, P: float, referenc
                     preload: np.ndarray) -> float:
     """G of an increment (DissipationControl.energy) between two states."""
     return DissipationControl(u0, P0, reference, preload, 0.0).energy(u, P)
+
+
+@dataclass(frozen=True)
+class OpeningControl:
+    """Indirect displacement control (de Borst 1987): the sum over a set of Gauss points of
+    their largest principal strain, weighted by their volumes, grows by `increment` in the
+    increment. Through the snap-back of a localising crack the crack strains grow while the
+    deflection turns back, so the opening is a monotone path parameter where the energy
+    released is not (docs/solver.md). `B` (m, 4, nd), `dofs` (m, nd), `weights` (m,) of the
+    chosen points; `start` the opening at the start of the increment."""
+
+    B: np.ndarray
+    dofs: np.ndarray
+    weights: np.ndarray
+    start: float
+    increment: float
+
+    def _strains(self, u: np.ndarray) -> np.ndarray:
+        return np.einsum("mij,mj->mi", self.B, u[self.dofs])
+
+    def opening(self, u: np.ndarray) -> float:
+        return float(self.weights @ _largest_principal(self._strains(u))[0])
+
+    def residual(self, u: np.ndarray, P: float) -> float:
+        return self.opening(u) - self.start - self.increment
+
+    def gradient(self, u: np.ndarray) -> np.ndarray:
+        """d opening / d u (n_eq,)."""
+        _, d_eps = _largest_principal(self._strains(u))
+        local = np.einsum("m,mi,mij->mj", self.weights, d_eps, self.B)
+        return np.bincount(self.dofs.ravel(), local.ravel(), minlength=u.size)[:u.size]
+
+    def correction(self, u: np.ndarray, P: float, q1: np.ndarray, q2: np.ndarray) -> float:
+        g = self.gradient(u)
+        return _correction(self.residual(u, P), float(g @ q1), float(g @ q2), 0.0)
+
+
+def _largest_principal(strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """In-plane largest principal strain (m,) of [xx, yy, zz, xy (engineering)] and its
+    derivative (m, 4) with respect to the components."""
+    xx, yy, xy = strain[:, 0], strain[:, 1], strain[:, 3]
+    radius = np.sqrt((0.5 * (xx - yy)) ** 2 + (0.5 * xy) ** 2)
+    safe = np.maximum(radius, 1e-300)
+    d = np.zeros_like(strain)
+    d[:, 0] = 0.5 + np.where(radius > 0, 0.25 * (xx - yy) / safe, 0.5)
+    d[:, 1] = 0.5 - np.where(radius > 0, 0.25 * (xx - yy) / safe, 0.5)
+    d[:, 3] = np.where(radius > 0, 0.25 * xy / safe, 0.0)
+    return 0.5 * (xx + yy) + radius, d

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -101,6 +101,8 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
     current = _evaluate(problem, start, start.u.copy(), start.load_factor, F_pre, R)
     flags = problem.point_flags(current.evaluation.states)
     disp_norm, flips = math.inf, 0
+    previous_moduli = None
+    forensics["chords"] = []
     for iteration in range(1, settings.max_iterations + 1):
         log.debug("newton %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
                   "gap flips %d, Gauss-point flag changes %s, step length %s", iteration,
@@ -120,6 +122,9 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         if iteration == 1 and last_increment is not None and _norm(last_increment) > 0.0:
             matrix_at = problem.structure.evaluate(
                 current.u + PREDICTOR_PROBE * last_increment, start.states, tangent=True)
+        elif previous_moduli is not None:
+            matrix_at = _chords_at_kinks(problem, start, current, previous_moduli, forensics)
+        previous_moduli = current.evaluation.moduli
         du, dP, dm = _newton_direction(problem, current, control, matrix_at)
         eta, trial = _line_search(problem, start, current, du, dP, dm, F_pre, R,
                                   LINE_SEARCH_RISE if flips else 1.0)
@@ -145,6 +150,30 @@ def _constraints_hold(problem: Problem, settings: SolverSettings, current: Itera
     gap, force = problem.constraints.constraint_residuals(current.u)
     return (gap <= settings.tolerance_displacement * _norm(current.u)
             and force <= settings.tolerance_load * current.scale)
+
+
+KINK_JUMP = 0.1
+"""A Gauss point whose tangent moduli jumped by more than this fraction in an iteration has
+crossed a kink of its law (loading/unloading, a peak): its secant stands in the matrix."""
+
+
+def _chords_at_kinks(problem: Problem, start: PathState, current: Iterate,
+                     previous_moduli: np.ndarray, forensics: dict) -> object:
+    """The evaluation whose moduli build the matrix: the consistent tangent, except at the
+    points whose tangent jumped in the last iteration (a kink crossed), where the law's
+    secant (its iteration moduli) is taken: Newton on a kinked function cycles across the
+    kink, the secant (a chord through the origin of the point's branch) does not. The
+    residual is the law's as it is; only the matrix changes."""
+    moduli = current.evaluation.moduli
+    jump = np.linalg.norm(moduli - previous_moduli, axis=(-2, -1))
+    size = np.maximum(np.linalg.norm(previous_moduli, axis=(-2, -1)), 1e-30)
+    kinked = jump > KINK_JUMP * size
+    forensics["chords"].append(int(np.count_nonzero(kinked)))
+    if not kinked.any():
+        return current.evaluation
+    secant = problem.structure.evaluate(current.u, start.states).moduli
+    return replace(current.evaluation,
+                   moduli=np.where(kinked[..., None, None], secant, moduli))
 
 
 def _count_changes(before, after) -> int:

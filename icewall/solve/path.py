@@ -3,11 +3,12 @@ it to convergence, and yields it or cuts it. No fallback schemes and no frozen p
 that does not converge is cut, and the run stops with a reason when the smallest fails.
 
 The preload goes by load control. The control stage goes by displacement control while it
-converges; where it cannot (a snap-back of the control deflection: a crack or a crushing band
-releases more energy than the rest of the wall can take up at a fixed deflection), the steps
-are taken under dissipation control (`controls.DissipationControl`), which follows the path
-through the snap-back, until the load and the deflection rise together again. The step size
-(deflection or released energy) follows the iteration count (`steps.StepSizeController`).
+converges; where it cannot at the smallest step (a snap-back of the control deflection: a crack
+releases more energy than the rest of the wall can take up at a fixed deflection), the steps are
+taken under a control that grows through the snap-back - the opening of the concrete points
+at or near cracking (`controls.OpeningControl`; the energy released, `DissipationControl`,
+for other laws) - until the load and the deflection rise together again. The step size
+(deflection or opening) follows the iteration count (`steps.StepSizeController`).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from icewall.solve.controls import (
     DisplacementControl,
     DissipationControl,
     LoadControl,
+    OpeningControl,
     released_energy,
 )
 from icewall.solve.newton import newton_increment
@@ -39,10 +41,13 @@ from icewall.solve.steps import StepSizeController
 
 log = logging.getLogger(__name__)
 
-FIRST_RELEASE = 1e-4
-"""First dissipation step after a switch, as a fraction of the external work 1/2 f.u so far."""
-SMALLEST_RELEASE = 1e-9
-"""Dissipation steps below this fraction of the external work stop the run."""
+FIRST_OPENING = 0.05
+"""First opening step after a switch, as a fraction of the cracking strain of the set."""
+SMALLEST_OPENING = 1e-8
+"""Opening steps below this fraction of the cracking strain of the set stop the run."""
+NEAR_CRACKING = 0.8
+"""Points whose largest principal strain exceeds this fraction of their cracking strain (or
+that have cracked) form the opening control's set."""
 
 
 def _controller(settings: SolverSettings, largest: float) -> StepSizeController:
@@ -69,6 +74,40 @@ class _Path:
     def released(self, inc: Increment) -> float:
         return released_energy(self.state.u, self.state.load_factor, inc.u, inc.load_factor,
                                self.R, self.F_pre)
+
+    def snap_back_control(self, fraction: float):
+        """The control through a snap-back: the opening of the concrete points at or near
+        cracking (`opening_control`); without concrete (a law of another kind, e.g. the
+        test bars), the energy released, as `fraction` of the external work so far."""
+        if any(g.model == "rotating_crack" for g in self.problem.structure.groups):
+            return self.opening_control(fraction)
+        return DissipationControl(self.state.u, self.state.load_factor, self.R, self.F_pre,
+                                  fraction * self.work())
+
+    def opening_control(self, fraction: float) -> OpeningControl:
+        """The opening control of the concrete points at or near cracking in the current
+        state, asking for `fraction` of their (volume-weighted) cracking strain."""
+        s = self.problem.structure
+        kin, nq = s.kinematics, s.n_gauss
+        elements, points, scales = [], [], []
+        for group, state in zip(s.groups, self.state.states, strict=True):
+            if group.model != "rotating_crack":
+                continue
+            eps_t = np.broadcast_to(np.asarray(group.params.eps_t, float), (state.strain.shape[0],))
+            largest = _largest_principal_strain(state.strain)
+            chosen = np.flatnonzero((largest >= NEAR_CRACKING * eps_t)
+                                    | state.cracked.any(axis=1))
+            if chosen.size == 0:  # none near cracking: the ten nearest
+                chosen = np.argsort(largest / eps_t)[-10:]
+            elements.append(group.cells[chosen // nq])
+            points.append(chosen % nq)
+            scales.append(eps_t[chosen])
+        e, q = np.concatenate(elements), np.concatenate(points)
+        weights = kin.dV[e, q]
+        control = OpeningControl(kin.B[e, q], kin.dofs[e], weights, 0.0, 0.0)
+        scale = float(weights @ np.concatenate(scales))
+        start = control.opening(self.state.u)
+        return OpeningControl(control.B, control.dofs, weights, start, fraction * scale)
 
 
 def _advance_preload(problem: Problem, settings: SolverSettings, state: PathState,
@@ -105,13 +144,13 @@ def _next_state(problem: Problem, state: PathState, inc: Increment, resume: tupl
 
 def _advance_control(problem: Problem, settings: SolverSettings, state: PathState,
                      preload: float, resume: tuple) -> Iterator[tuple[Increment, PathState]]:
-    """Displacement control to the target, dissipation control through snap-backs."""
+    """Displacement control to the target, the snap-back control through snap-backs."""
     c = problem.constraints
     steps = _controller(settings, settings.increment)
     size, mode, release = steps.largest, "displacement", 0.0
-    if resume:  # (size, release, 1.0 while under dissipation control): _next_state below
+    if resume:  # (size, release, 1.0 while under the snap-back control): _next_state below
         size, release = resume[0], resume[1]
-        mode = "dissipation" if resume[2] else "displacement"
+        mode = "opening" if resume[2] else "displacement"
     path = _Path(problem, state, preload)
     last_increment = None
     while -float(state.u[problem.control_equation]) < settings.target - 1e-12 * max(
@@ -122,8 +161,8 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             control = DisplacementControl(problem.control_equation, goal)
             where = f"control {goal:.4g}"
         else:
-            control = DissipationControl(state.u, state.load_factor, path.R, path.F_pre, release)
-            where = f"control {current:.4g} (releasing {release:.3g} N mm)"
+            control = path.snap_back_control(release)
+            where = f"control {current:.4g} (snap-back control, step {release:.3g})"
         tic = time.perf_counter()
         try:
             inc = newton_increment(problem, settings, state, control, preload,
@@ -134,15 +173,15 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             log.info("%s: %s", where, exc)
             if mode == "displacement" and reason != "singular system" and (
                     size <= steps.smallest * (1 + 1e-9)):
-                # no equilibrium at the next deflection: a snap-back, followed by dissipation
-                mode, release = "dissipation", FIRST_RELEASE * path.work()
-                log.info("%s: switching to dissipation control", where)
+                # no equilibrium at the next deflection: a snap-back, followed by its control
+                mode, release = "opening", FIRST_OPENING
+                log.info("%s: switching to opening control", where)
                 continue
-            if mode == "dissipation":
+            if mode == "opening":
                 release *= 0.5
-                if release < SMALLEST_RELEASE * path.work():
-                    raise ConvergenceError(f"{exc} at {where}, also under dissipation "
-                                           "control at the smallest release",
+                if release < SMALLEST_OPENING:
+                    raise ConvergenceError(f"{exc} at {where}, also under opening control at "
+                                           "the smallest opening step",
                                            reason=reason) from None
                 continue
             size = steps.after_failure(size, where, reason, str(exc))
@@ -151,7 +190,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         inc.wall_time = time.perf_counter() - tic
         d_deflection = inc.control_displacement - current
         d_load = inc.load_factor - state.load_factor
-        if mode == "dissipation":
+        if mode == "opening":
             inc.snap_back = d_deflection < 0.0
             growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
             release *= min(2.0, max(0.5, growth))
@@ -162,9 +201,14 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             size = steps.after_success(size, inc.iterations)
         last_increment = inc.u - state.u
         state = _next_state(problem, state, inc, ("control", size, release,
-                                                  float(mode == "dissipation")))
+                                                  float(mode == "opening")))
         path.state = state
         yield inc, state
+
+
+def _largest_principal_strain(strain: np.ndarray) -> np.ndarray:
+    xx, yy, xy = strain[:, 0], strain[:, 1], strain[:, 3]
+    return 0.5 * (xx + yy) + np.sqrt((0.5 * (xx - yy)) ** 2 + (0.5 * xy) ** 2)
 
 
 def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,

@@ -117,3 +117,27 @@ def test_step_size_controller_aims_at_the_target_iterations():
     assert steps.after_failure(0.25, "x", "non-convergence", "m") == 0.125
     with pytest.raises(ConvergenceError, match="smallest step"):
         steps.after_failure(1.0 / 64, "control 3", "non-convergence", "no convergence")
+
+
+def test_opening_control_gradient_and_correction():
+    """The opening (sum of weighted largest principal strains) against central differences,
+    and the bordered load-factor correction that meets its target for a linear response."""
+    from icewall.solve.controls import OpeningControl
+
+    rng = np.random.default_rng(7)
+    m, nd, n = 5, 8, 20
+    B = rng.normal(size=(m, 4, nd))
+    dofs = rng.integers(0, n, size=(m, nd))
+    weights = rng.uniform(0.5, 2.0, m)
+    u = rng.normal(size=n)
+    control = OpeningControl(B, dofs, weights, start=0.0, increment=0.0)
+    g = control.gradient(u)
+    h = 1e-6
+    fd = np.array([(control.opening(u + h * e) - control.opening(u - h * e)) / (2 * h)
+                   for e in np.eye(n)])
+    assert np.allclose(g, fd, rtol=1e-6, atol=1e-8)
+    # du = dP q1 + q2 with the correction: the linearised opening meets its target
+    target = OpeningControl(B, dofs, weights, control.opening(u), 0.3)
+    q1, q2 = rng.normal(size=n), rng.normal(size=n)
+    dP = target.correction(u, 0.0, q1, q2)
+    assert target.residual(u, 0.0) + g @ (dP * q1 + q2) == pytest.approx(0.0, abs=1e-12)
