@@ -166,18 +166,40 @@ def test_floored_moduli_equal_numpy(formulation, floor, coaxial):
         assert np.all(np.abs(result - reference) <= 1e-12 * scale)
 
 
+# OpenBLAS kernels whose FMA chains the compiled kernel copies (checked bit for bit here);
+# with others (Sandybridge, Prescott: no FMA) NumPy's matmul sums differently, and the two
+# kernels agree to round-off only (checked to 1e-12 of each row, as the other tests do).
+BIT_EXACT_BLAS = ("Haswell", "SkylakeX", "Zen", "Cooperlake", "SapphireRapids")
+
+
+def _blas_architecture() -> str:
+    """The running OpenBLAS kernel (threadpoolctl; '' where it cannot tell)."""
+    try:
+        from threadpoolctl import threadpool_info
+    except ImportError:
+        return ""
+    return next((str(i.get("architecture")) for i in threadpool_info()
+                 if i.get("internal_api") == "openblas"), "")
+
+
 @pytest.mark.skipif(platform.machine().lower() not in ("x86_64", "amd64"),
                     reason="bit equality assumes x86's einsum lanes and BLAS FMA chains")
 @pytest.mark.parametrize("formulation", FORMULATIONS)
 def test_bit_for_bit_on_x86(formulation):
-    """Same arithmetic in the same order, NumPy's own exp and arctan2: not one bit differs."""
+    """Same arithmetic in the same order, NumPy's own exp and arctan2: not one bit differs
+    with the FMA kernels of OpenBLAS (BIT_EXACT_BLAS), round-off with the others."""
+    exact = _blas_architecture() in BIT_EXACT_BLAS
     for strain, state, params, frozen in _calls(formulation, "corotational", "per-point", 2):
         reference = _reference(strain, state, params, formulation, "corotational", frozen)
         _assert_same_update(reference, compiled.compiled_update(
-            strain, state, params, formulation, "corotational", frozen), exact=True)
-        np.testing.assert_array_equal(
-            compiled.compiled_floored_moduli(reference[1], params, formulation, 0.02, True),
-            floored_moduli(reference[1], params, formulation, 0.02, True))
+            strain, state, params, formulation, "corotational", frozen), exact=exact)
+        moduli = compiled.compiled_floored_moduli(reference[1], params, formulation, 0.02, True)
+        expected = floored_moduli(reference[1], params, formulation, 0.02, True)
+        if exact:
+            np.testing.assert_array_equal(moduli, expected)
+        else:
+            scale = np.abs(expected).max(axis=(1, 2), keepdims=True)
+            assert np.all(np.abs(moduli - expected) <= 1e-12 * scale)
 
 
 @pytest.mark.parametrize("formulation", FORMULATIONS)
@@ -268,8 +290,12 @@ def test_analysis_load_history_is_the_same_with_both_kernels(tmp_path, monkeypat
     assert len(calls) >= numba_run["iterations"].sum()  # every evaluation went through it
     uncracked = numpy_run["cracked_in_plane"] == 0
     assert uncracked.any() and not uncracked.all() and numpy_run["load"].size == 12
+    # bit-identical kernels give identical histories; where the BLAS kernel makes them differ
+    # at round-off (BIT_EXACT_BLAS), the secant iteration, stopped at the first iterate within
+    # 5 %, amplifies that to about 1e-8 (Sandybridge): a kernel error would show at 1e-3
+    rtol = 1e-12 if _blas_architecture() in BIT_EXACT_BLAS else 1e-6
     np.testing.assert_allclose(numba_run["load"][uncracked], numpy_run["load"][uncracked],
-                               rtol=1e-12)
+                               rtol=rtol)
     assert numba_run["load"].max() == pytest.approx(numpy_run["load"].max(), rel=1e-6)
     np.testing.assert_array_equal(numba_run["cracked_in_plane"], numpy_run["cracked_in_plane"])
 
