@@ -86,7 +86,23 @@ def _warn_resources(loaded, output_dir: str | None = None) -> None:
                         loaded.line_of("outputs.fields"), "outputs.fields")
 
 
-@click.group()
+class _OneLineErrors(click.Group):
+    """click's usage errors as one line (`error: ...`, exit 2), like every other error."""
+
+    def main(self, *args, **kwargs):
+        kwargs["standalone_mode"] = False
+        try:
+            return super().main(*args, **kwargs)
+        except click.exceptions.UsageError as exc:
+            hint = f" (icewall {exc.ctx.info_name} --help)" if exc.ctx else ""
+            _fail(f"{exc.format_message()}{hint}", exc.exit_code)
+        except click.ClickException as exc:
+            _fail(exc.format_message(), exc.exit_code)
+        except click.Abort:
+            _fail("aborted", 1)
+
+
+@click.group(cls=_OneLineErrors)
 @click.version_option(__version__, prog_name="icewall")
 @click.option("-v", "--verbose", count=True, help="-v: solver messages; -vv: every iteration.")
 def main(verbose: int) -> None:
@@ -163,6 +179,9 @@ def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool,
     from icewall.deck.load import load_deck
     from icewall.pipeline import run_deck
 
+    if output is not None and not output.strip():
+        raise click.BadParameter("is empty: give a result file or a directory",
+                                 param_hint="-o/--output")
     loaded = load_deck(deck, overrides)
     _warn_resources(loaded, None if output is None else
                     str(Path(output).parent if output.endswith(".h5") else output))
@@ -242,10 +261,13 @@ def compare(results_dir: str, baseline_path: str, update: bool, peak_tol: float 
 @_handle_errors
 def summary(result: str, as_json: bool) -> None:
     """Key figures of a RESULT file: peak load and its deflection, final load, steps, time."""
+    from icewall.results.reader import damaged_result
     from icewall.results.summary import format_summary, summarize
 
-    data = summarize(result)
-    click.echo(json.dumps(data, indent=2) if as_json else format_summary(data))
+    with damaged_result(result):
+        data = summarize(result)
+        text = json.dumps(data, indent=2) if as_json else format_summary(data)
+    click.echo(text)
 
 
 @main.command()

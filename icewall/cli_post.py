@@ -120,8 +120,11 @@ def export(result: str, output: str | None) -> None:
     """Export RESULT for ParaView: a time series (.pvd + one .vtu per stored step) of the mesh,
     nodal displacements, interface state and cell means of the Gauss fields."""
     from icewall.post.export import export_vtu_series
+    from icewall.results.reader import damaged_result
 
-    path, time_axis = export_vtu_series(result, output)
+    with damaged_result(result):
+        path, time_axis = export_vtu_series(
+            result, output, warn=lambda text: click.echo(f"warning: {text}", err=True))
     click.echo(f"wrote {path} (time = {time_axis}; ParaView opens it directly)")
 
 

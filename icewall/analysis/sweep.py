@@ -306,14 +306,7 @@ def _die_with(sweep_pid: int) -> None:
 
     def watch() -> None:  # also where prctl is missing, or the parent died before it
         while True:
-            try:
-                os.kill(sweep_pid, 0)
-                alive = os.getppid() == parent
-            except ProcessLookupError:
-                alive = False
-            except PermissionError:
-                alive = True
-            if not alive:
+            if not (_alive(sweep_pid) and os.getppid() == parent):
                 os.kill(os.getpid(), signal.SIGKILL)
             time.sleep(0.5)
 
@@ -405,6 +398,36 @@ def run_dask(jobs: list[Job], address: str, done: Callable[[dict], None],
             raise
 
 
+def validate_jobs(jobs: Iterable[Job]) -> None:
+    """Load and validate the deck of every job with its overrides (`--dry-run`): a bad value
+    in one run is a DeckError (exit 2) naming that run. A real sweep does not stop for it:
+    that run fails with the same message and the others go on."""
+    from icewall.deck.load import load_deck
+
+    for job in jobs:
+        try:
+            load_deck(job.deck, job.overrides)
+        except DeckError as exc:
+            raise DeckError(f"{exc.detail} (in run {job.name})", exc.file, exc.line,
+                            exc.key) from None
+
+
+def _alive(pid: int) -> bool:
+    """Whether process `pid` runs: it exists and, on Linux, is not a zombie (a SIGKILLed
+    sweep stays a zombie until its parent reaps it, and os.kill(pid, 0) still succeeds)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stat:
+            return stat.read().rsplit(b")", 1)[1].split()[0] not in (b"Z", b"X")
+    except OSError:
+        return True  # no /proc: existence is all that can be told
+
+
 def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
                   overrides: Iterable[str] = (), outdir: str = "results/sweep",
                   workers: int | None = None, scheduler: str | None = None,
@@ -434,9 +457,10 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
         echo = click.echo
     say = (lambda text: None) if quiet else echo
     jobs = with_realizations(expand_jobs(decks, overrides, sweep_file, outdir), realizations)
-    if dry_run:
+    if dry_run:  # every run's deck and overrides checked: a listed run is one that can start
         for job in jobs:
             echo(f"{job.name}  {job.deck}  {' '.join(job.overrides)}  -> {job.output}")
+        validate_jobs(jobs)
         return 0
     make_output_directory(outdir)
     results: dict[str, dict] = {}

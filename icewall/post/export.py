@@ -78,9 +78,10 @@ def write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
                     f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
 
 
-def export_vtu_series(result_path: str | Path, out: str | Path | None = None
-                      ) -> tuple[Path, str]:
-    """Write the .pvd and its .vtu files of a result file; returns (pvd path, time meaning)."""
+def export_vtu_series(result_path: str | Path, out: str | Path | None = None,
+                      warn=None) -> tuple[Path, str]:
+    """Write the .pvd and its .vtu files of a result file; returns (pvd path, time meaning).
+    `warn(text)` is told of steps the stored deck says have fields that the file lacks."""
     import meshio
 
     out = Path(out) if out is not None else default_output(result_path)
@@ -91,6 +92,11 @@ def export_vtu_series(result_path: str | Path, out: str | Path | None = None
         mesh, h = r.mesh, r.history
         if not r.steps:
             raise ResultError(f"{result_path}: no step stores fields; nothing to export")
+        missing = r.missing_field_steps()
+        if missing and warn is not None:
+            warn(f"{result_path}: step(s) {', '.join(map(str, missing[:10]))} should store "
+                 f"fields but the file lacks them (damaged?); exported the {len(r.steps)} "
+                 "stored")
         folder.mkdir(parents=True, exist_ok=True)
         row = {int(s): i for i, s in enumerate(h["step"])}
         defl = np.array([h["control_displacement"][row[s]] for s in r.steps])

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import h5py
 import numpy as np
@@ -93,6 +95,23 @@ class ResultFile:
             raise
         self._mesh: Mesh | None = None
 
+    def missing_field_steps(self) -> list[int]:
+        """History steps whose Gauss/nodal fields the stored deck says were written
+        (outputs.fields not empty, every outputs.every-th step) but the file lacks: a damaged
+        file (an empty list where the deck cannot be read)."""
+        from icewall.deck.load import load_deck_text
+        from icewall.errors import IcewallError
+
+        try:
+            outputs = load_deck_text(self.deck_text, self.path).deck.outputs
+        except (IcewallError, AttributeError, TypeError, ValueError):
+            return []
+        if not outputs.fields:
+            return []
+        stored = set(self.steps)
+        return [int(s) for s in self.history["step"]
+                if int(s) % outputs.every == 0 and int(s) not in stored]
+
     @property
     def status(self) -> str:
         """"completed", "stopped", "failed", or "running" (still running or killed)."""
@@ -179,3 +198,16 @@ def _ranges(steps: list[int]) -> str:
 def open_result(path: str | os.PathLike) -> ResultFile:
     """Open a result file (final path or ``.partial``); ResultError if it is not one."""
     return ResultFile(path)
+
+
+@contextmanager
+def damaged_result(path: str | os.PathLike) -> Iterator[None]:
+    """Turn what a damaged result file makes the readers raise (a group or dataset missing,
+    an array of the wrong shape, a stored deck that no longer parses) into one ResultError
+    naming the file (exit 2), instead of an internal error."""
+    try:
+        yield
+    except (KeyError, ValueError, TypeError, IndexError) as exc:
+        text = " ".join(str(exc).split())[:160]
+        raise ResultError(f"{os.fspath(path)}: damaged result file ({type(exc).__name__}: "
+                          f"{text})") from None

@@ -222,4 +222,9 @@ def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.nd
         if merit <= rise * reference or reference == 0.0:
             return eta, trial
         eta *= 0.5
-    return best[1], best[2]
+    # no step length lowers the unbalance: along this direction the residual is not smooth
+    # (a kink within the step); the full step leaves the kink's neighbourhood, where the
+    # chords (_chords_at_kinks) take over, while a tiny one stalls in front of it
+    full = _evaluate(problem, start, current.u + du, current.load_factor + dP, F_pre, R,
+                     _trial_gap_force(problem, dm, 1.0))
+    return 1.0, full
