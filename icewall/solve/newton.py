@@ -211,12 +211,13 @@ def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.nd
     """Step length eta and the iterate it gives: the full step unless its unbalance (with the
     gap multipliers moved by eta dlam at their current states) exceeds `rise` times the
     current one; then halve, keeping the best step length tried."""
-    eta, best = 1.0, None
+    eta, best, full = 1.0, None, None  # full: the trial of the full step
     reference = _norm(current.unbalance)
     for _ in range(LINE_SEARCH_CUTS + 1):
         trial = _evaluate(problem, start, current.u + eta * du, current.load_factor + eta * dP,
                           F_pre, R, _trial_gap_force(problem, dm, eta))
         merit = _norm(trial.unbalance)
+        full = full or trial
         if best is None or merit < best[0]:
             best = (merit, eta, trial)
         if merit <= rise * reference or reference == 0.0:
@@ -225,6 +226,8 @@ def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.nd
     # no step length lowers the unbalance: along this direction the residual is not smooth
     # (a kink within the step); the full step leaves the kink's neighbourhood, where the
     # chords (_chords_at_kinks) take over, while a tiny one stalls in front of it
-    full = _evaluate(problem, start, current.u + du, current.load_factor + dP, F_pre, R,
-                     _trial_gap_force(problem, dm, 1.0))
-    return 1.0, full
+    # (unless the direction has gone wild: a load-factor change larger than the load factor,
+    # as a control row that is nearly singular at its first iterate gives)
+    if abs(dP) <= abs(current.load_factor):
+        return 1.0, full
+    return best[1], best[2]
