@@ -37,7 +37,7 @@ validate: $(STAMP)  ## all specimen decks at full resolution, 3 round-off realiz
 	    --set 'outputs.fields=[]' -o results/validation
 
 compare: $(STAMP)  ## CI variants of the analysed decks (to just past their peaks) against the stored baseline
-	$(BIN)/python -m icewall.analysis.compare -o results/compare
+	$(BIN)/python -m icewall.analysis.ci_gate -o results/compare
 
 $(VENV)/.plot: $(STAMP)
 	$(BIN)/python -m pip install --quiet -e ".[dev,plot]"

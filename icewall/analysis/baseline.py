@@ -8,7 +8,7 @@ A *baseline* is a YAML file with a header and one entry per run (the result file
     # comment lines: what produced the file and what the numbers are
     icewall_version: 0.1.0
     date: 2026-11-23T06:10:00+00:00
-    command: python -m icewall.analysis.compare --update
+    command: python -m icewall.analysis.ci_gate --update
     note: icewall's own regression values, not validation data
     tolerances: {peak: 0.03, residual: 0.10, ratio_band: [0.8, 1.1]}
     ratio: {name: ult_test/pred, mean: 0.86, n: 8}

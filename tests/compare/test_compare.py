@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from icewall.analysis import ci_gate
 from icewall.analysis import compare as cmp
 from icewall.errors import ResultError
 
@@ -174,7 +175,7 @@ def test_a_status_any_realization_ended_with_is_no_change():
 
 
 def test_realizations_perturb_only_the_patch_width(tmp_path):
-    jobs = {j.name: j for j in cmp.ci_jobs(tmp_path, {"cf4": ("loads.control.target=15",)},
+    jobs = {j.name: j for j in ci_gate.ci_jobs(tmp_path, {"cf4": ("loads.control.target=15",)},
                                            realizations=3)}
     assert sorted(jobs) == ["cf4", "cf4.r1", "cf4.r2"]
     assert jobs["cf4"].overrides == ("loads.control.target=15",)
@@ -185,12 +186,12 @@ def test_realizations_perturb_only_the_patch_width(tmp_path):
 
 def test_stored_baseline_matches_the_ci_variants():
     data = cmp.read_baseline(BASELINE)
-    assert set(data["runs"]) == set(cmp.CI_VARIANTS)
+    assert set(data["runs"]) == set(ci_gate.CI_VARIANTS)
     for name, run in data["runs"].items():
-        assert run["overrides"] == list(cmp.CI_VARIANTS[name])
+        assert run["overrides"] == list(ci_gate.CI_VARIANTS[name])
         assert run["deck"] == f"decks/{name}.yaml"
         # the round-off realizations and the same variant on other platforms (--platform)
-        assert run["realizations"] >= cmp.REALIZATIONS
+        assert run["realizations"] >= ci_gate.REALIZATIONS
         assert len(run["curve_bands"]) == len(run["curve_deflections"]) > 0
         assert run["status"] in run["statuses"]
         if run["peak_load"] is not None:  # the run itself is one of the realizations
@@ -202,10 +203,10 @@ def test_ci_comparison_of_the_ci_variants(tmp_path):
     """Runs the eight CI variants (about 2 minutes on 2 cores) and compares them with the
     stored baseline: must pass on the current code."""
     lines: list[str] = []
-    status = cmp.run_ci_comparison(tmp_path / "ci", BASELINE, workers=2, echo=lines.append)
+    status = ci_gate.run_ci_comparison(tmp_path / "ci", BASELINE, workers=2, echo=lines.append)
     assert status == 0, "\n".join(lines)
     assert lines[-1].splitlines()[-1] == "PASS"
-    assert len(list((tmp_path / "ci").glob("*.h5"))) == len(cmp.CI_VARIANTS)
+    assert len(list((tmp_path / "ci").glob("*.h5"))) == len(ci_gate.CI_VARIANTS)
 
 
 def test_a_figure_whose_band_is_wider_than_its_tolerance_is_reported_not_gated():
