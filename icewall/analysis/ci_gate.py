@@ -68,7 +68,8 @@ def run_variants(outdir: str | os.PathLike, workers: int | None = None,
     """Run the CI variants (and their realizations) in a local process pool (finished runs
     are skipped, as in `icewall sweep`); writes OUTDIR/<name>.h5 and OUTDIR/sweep_summary.csv.
     Returns the per-run results (name, path, status, run_time_s, ...)."""
-    from icewall.analysis.sweep import finished_status, run_local
+    from icewall.analysis.sweep import finished_status
+    from icewall.analysis.sweep_runners import run_local
     from icewall.analysis.sweep_table import build_rows, format_table, ratio_stats, write_csv
 
     os.makedirs(outdir, exist_ok=True)

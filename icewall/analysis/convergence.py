@@ -42,14 +42,8 @@ import numpy as np
 
 from icewall.analysis import convergence_table as ct
 from icewall.analysis.extract import RESIDUAL_DEFLECTION
-from icewall.analysis.sweep import (
-    FINISHED,
-    Job,
-    finished_status,
-    make_output_directory,
-    run_job,
-    run_local,
-)
+from icewall.analysis.sweep import FINISHED, finished_status, make_output_directory
+from icewall.analysis.sweep_runners import Job, run_job, run_local
 from icewall.errors import DeckError, ResultError
 
 DEFAULT_LADDER = {"families": {

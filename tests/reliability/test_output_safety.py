@@ -21,7 +21,8 @@ from reliability_helpers import (
     wait_for,
 )
 
-from icewall.analysis.sweep import expand_jobs, run_job
+from icewall.analysis.sweep import expand_jobs
+from icewall.analysis.sweep_runners import run_job
 from icewall.errors import ResultError
 from icewall.results.checkpoint import write_checkpoint
 from icewall.results.output_safety import OutputLock

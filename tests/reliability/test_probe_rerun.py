@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from reliability_helpers import CF4, LINEAR, icewall, one_error_line
 
-from icewall.analysis.sweep import _alive
+from icewall.analysis.sweep_runners import _alive
 
 FIELDS = ["--set", "outputs.fields=[displacement, stress, strain, state]"]
 

@@ -12,14 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from icewall.analysis.sweep import (
-    expand_jobs,
-    finished_status,
-    run_job,
-    run_local,
-    split_values,
-    sweep_command,
-)
+from icewall.analysis.sweep import expand_jobs, finished_status, split_values, sweep_command
+from icewall.analysis.sweep_runners import run_job, run_local
 from icewall.errors import DeckError
 
 DECKS = Path(__file__).resolve().parents[2] / "decks"
