@@ -76,12 +76,6 @@ def _correction(phi: float, g_q1: float, g_q2: float, h: float) -> float:
     return -(phi + g_q2) / denominator
 
 
-def released_energy(u0: np.ndarray, P0: float, u: np.ndarray, P: float, reference: np.ndarray,
-                    preload: np.ndarray) -> float:
-    """G of an increment (DissipationControl.energy) between two states."""
-    return DissipationControl(u0, P0, reference, preload, 0.0).energy(u, P)
-
-
 @dataclass(frozen=True)
 class OpeningControl:
     """Indirect displacement control (de Borst 1987): the sum over a set of Gauss points of
@@ -101,14 +95,14 @@ class OpeningControl:
         return np.einsum("mij,mj->mi", self.B, u[self.dofs])
 
     def opening(self, u: np.ndarray) -> float:
-        return float(self.weights @ _largest_principal(self._strains(u))[0])
+        return float(self.weights @ largest_principal(self._strains(u))[0])
 
     def residual(self, u: np.ndarray, P: float) -> float:
         return self.opening(u) - self.start - self.increment
 
     def gradient(self, u: np.ndarray) -> np.ndarray:
         """d opening / d u (n_eq,)."""
-        _, d_eps = _largest_principal(self._strains(u))
+        _, d_eps = largest_principal(self._strains(u))
         local = np.einsum("m,mi,mij->mj", self.weights, d_eps, self.B)
         return np.bincount(self.dofs.ravel(), local.ravel(), minlength=u.size)[:u.size]
 
@@ -117,7 +111,7 @@ class OpeningControl:
         return _correction(self.residual(u, P), float(g @ q1), float(g @ q2), 0.0)
 
 
-def _largest_principal(strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def largest_principal(strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """In-plane largest principal strain (m,) of [xx, yy, zz, xy (engineering)] and its
     derivative (m, 4) with respect to the components."""
     xx, yy, xy = strain[:, 0], strain[:, 1], strain[:, 3]

@@ -17,6 +17,7 @@ import logging
 import math
 import time
 from collections.abc import Iterator
+from dataclasses import replace
 
 import numpy as np
 
@@ -33,7 +34,7 @@ from icewall.solve.controls import (
     DissipationControl,
     LoadControl,
     OpeningControl,
-    released_energy,
+    largest_principal,
 )
 from icewall.solve.newton import newton_increment
 from icewall.solve.settings import SolverSettings
@@ -71,10 +72,6 @@ class _Path:
         f = self.state.load_factor * self.R + self.F_pre
         return 0.5 * abs(float(f @ self.state.u))
 
-    def released(self, inc: Increment) -> float:
-        return released_energy(self.state.u, self.state.load_factor, inc.u, inc.load_factor,
-                               self.R, self.F_pre)
-
     def snap_back_control(self, fraction: float):
         """The control through a snap-back: the opening of the concrete points at or near
         cracking (`opening_control`); without concrete (a law of another kind, e.g. the
@@ -94,7 +91,7 @@ class _Path:
             if group.model != "rotating_crack":
                 continue
             eps_t = np.broadcast_to(np.asarray(group.params.eps_t, float), (state.strain.shape[0],))
-            largest = _largest_principal_strain(state.strain)
+            largest = largest_principal(state.strain)[0]
             chosen = np.flatnonzero((largest >= NEAR_CRACKING * eps_t)
                                     | state.cracked.any(axis=1))
             if chosen.size == 0:  # none near cracking: the ten nearest
@@ -105,9 +102,8 @@ class _Path:
         e, q = np.concatenate(elements), np.concatenate(points)
         weights = kin.dV[e, q]
         control = OpeningControl(kin.B[e, q], kin.dofs[e], weights, 0.0, 0.0)
-        scale = float(weights @ np.concatenate(scales))
-        start = control.opening(self.state.u)
-        return OpeningControl(control.B, control.dofs, weights, start, fraction * scale)
+        return replace(control, start=control.opening(self.state.u),
+                       increment=fraction * float(weights @ np.concatenate(scales)))
 
 
 def _advance_preload(problem: Problem, settings: SolverSettings, state: PathState,
@@ -204,11 +200,6 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                                                   float(mode == "opening")))
         path.state = state
         yield inc, state
-
-
-def _largest_principal_strain(strain: np.ndarray) -> np.ndarray:
-    xx, yy, xy = strain[:, 0], strain[:, 1], strain[:, 3]
-    return 0.5 * (xx + yy) + np.sqrt((0.5 * (xx - yy)) ** 2 + (0.5 * xy) ** 2)
 
 
 def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,
