@@ -166,6 +166,63 @@ def update_states(state: GapState, lam_N: np.ndarray, lam_T: np.ndarray, gap_N: 
     return new_state, sum(counts.values())
 
 
+def semismooth_states(state: GapState, lam_N: np.ndarray, lam_T: np.ndarray,
+                      gap_N: np.ndarray, gap_T: np.ndarray, mu: float,
+                      augmentation: float) -> tuple[GapState, int]:
+    """The pair states of a semismooth Newton iteration (Alart & Curnier 1991): decided anew at
+    every iterate from the augmented multipliers, not by transitions from the last state.
+
+    Normal: closed iff lam_N + r Delta_N < 0 (the complementarity Delta_N >= 0, lam_N <= 0,
+    lam_N Delta_N = 0 as the root of min(-lam_N, r Delta_N)). Tangential (a closed pair):
+    the trial force t = lam_T + r (Delta_T - stick_T), stick_T the pair's position at the
+    start of the step (or where it closed in it: backward-Euler friction); FIXED iff
+    |t| <= mu |lam_N + r Delta_N|, else SLIP with lam_T = sign(t) mu |lam_N + r Delta_N|
+    (the projection onto the Coulomb cone; the slip then follows the force, lam_T dDelta_T
+    >= 0). Any r > 0 gives the same solutions; r of the order of the interface stiffness
+    makes the decision weigh forces and gaps alike. Permanent pairs stay FIXED.
+    """
+    lam_N, lam_T = np.asarray(lam_N, float), np.asarray(lam_T, float)
+    gap_N, gap_T = np.asarray(gap_N, float), np.asarray(gap_T, float)
+    old = state.state
+    normal = lam_N + augmentation * gap_N
+    closed = (normal < 0.0) | state.permanent
+    closing = closed & (old == FREE)
+    stick_T = np.where(closing, gap_T, state.stick_T)
+    trial = lam_T + augmentation * (gap_T - stick_T)
+    limit = mu * np.abs(normal)
+    slips = closed & ~state.permanent & (np.abs(trial) > limit)
+    new = np.where(closed, np.where(slips, SLIP, FIXED), FREE).astype(np.int8)
+    lam_T = np.where(slips, np.sign(trial) * limit, lam_T)
+    counts = {f"{STATE_NAMES[a]}->{STATE_NAMES[b]}": int(np.count_nonzero((old == a) & (new == b)))
+              for a in (FIXED, SLIP, FREE) for b in (FIXED, SLIP, FREE) if a != b}
+    counts["slip reversed"] = int(np.count_nonzero(slips & (old == SLIP)
+                                                   & (lam_T * state.lam_T < 0)))
+    new_state = replace(state, state=new, lam_N=lam_N.copy(), lam_T=lam_T, gap_N=gap_N.copy(),
+                        gap_T=gap_T.copy(), stick_T=stick_T, transitions=counts)
+    return new_state, sum(counts.values())
+
+
+def settle_cycling_pairs(old: GapState, new: GapState, cycling: np.ndarray,
+                         gap_N: np.ndarray, gap_T: np.ndarray, mu: float,
+                         augmentation: float) -> GapState:
+    """`new` (Table 3.2's transitions from `old`) with the `cycling` pairs decided as a
+    semismooth Newton would (`semismooth_states`). Table 3.2 walks a pair from held to open
+    and back when each state contradicts itself (held: in tension; open: penetrating), as
+    happens next to a concrete point at a kink of its law; the augmented multipliers weigh
+    force and gap together, and a held pair that is pulled open again stays closed and
+    slides, at the Coulomb limit in the direction of its trial friction force (if it is then
+    in tension while sliding, it opens)."""
+    decided, _ = semismooth_states(old, new.lam_N, new.lam_T, gap_N, gap_T, mu, augmentation)
+    reopened = cycling & (decided.state == FREE) & (old.state == FIXED)
+    normal = np.abs(decided.lam_N + augmentation * gap_N)
+    trial = decided.lam_T + augmentation * (gap_T - decided.stick_T)
+    state = np.where(reopened, SLIP, decided.state)
+    lam_T = np.where(reopened, np.sign(trial) * mu * normal, decided.lam_T)
+    return replace(new, state=np.where(cycling, state, new.state).astype(np.int8),
+                   lam_T=np.where(cycling, lam_T, new.lam_T),
+                   stick_T=np.where(cycling, decided.stick_T, new.stick_T))
+
+
 def new_step(state: GapState, reset_slip: bool = True) -> GapState:
     """Start of a load step: slipped pairs reset to FIXED at their current Delta_T (§3.3.4).
 

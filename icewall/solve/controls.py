@@ -90,20 +90,30 @@ class OpeningControl:
     weights: np.ndarray
     start: float
     increment: float
+    reference: np.ndarray | None = None  # (m,) largest strains at the start: growth only
 
     def _strains(self, u: np.ndarray) -> np.ndarray:
         return np.einsum("mij,mj->mi", self.B, u[self.dofs])
 
+    def _growing(self, largest: np.ndarray) -> np.ndarray:
+        if self.reference is None:
+            return np.ones(largest.shape, bool)
+        return largest >= self.reference
+
     def opening(self, u: np.ndarray) -> float:
-        return float(self.weights @ largest_principal(self._strains(u))[0])
+        largest = largest_principal(self._strains(u))[0]
+        if self.reference is not None:
+            largest = np.maximum(largest - self.reference, 0.0)
+        return float(self.weights @ largest)
 
     def residual(self, u: np.ndarray, P: float) -> float:
         return self.opening(u) - self.start - self.increment
 
     def gradient(self, u: np.ndarray) -> np.ndarray:
         """d opening / d u (n_eq,)."""
-        _, d_eps = largest_principal(self._strains(u))
-        local = np.einsum("m,mi,mij->mj", self.weights, d_eps, self.B)
+        largest, d_eps = largest_principal(self._strains(u))
+        weights = np.where(self._growing(largest), self.weights, 0.0)
+        local = np.einsum("m,mi,mij->mj", weights, d_eps, self.B)
         return np.bincount(self.dofs.ravel(), local.ravel(), minlength=u.size)[:u.size]
 
     def correction(self, u: np.ndarray, P: float, q1: np.ndarray, q2: np.ndarray) -> float:

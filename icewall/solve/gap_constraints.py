@@ -21,6 +21,7 @@ from icewall.interface.augmented import (
     upper_rows,
 )
 from icewall.interface.gap import (
+    FREE,
     GapState,
     constraint_matrix,
     count_states,
@@ -28,11 +29,16 @@ from icewall.interface.gap import (
     friction_work_increment,
     new_step,
     relative_displacement,
+    settle_cycling_pairs,
     update_states,
 )
 from icewall.interface.pattern import AugmentedPattern, canonical_csr
 from icewall.model.build import Model
 from icewall.solve.constraints import SupportConstraints
+
+CYCLE_TOGGLES = 6
+"""Switches between held and open within one step after which a pair's state is decided
+semismoothly (GapConstraints._settle_cycles)."""
 
 
 class GapConstraints(SupportConstraints):
@@ -66,6 +72,9 @@ class GapConstraints(SupportConstraints):
         self._CtC = (self.C.T @ self.C).tocsr()
         self.changes_in_step = np.zeros(self.n_pairs, dtype=int)
         self.frozen_pairs = 0
+        # the Newton scheme: a pair that cycles between held and open is decided semismoothly
+        self.settle_cycles = False
+        self.augmentation: float | None = None
         self._pattern: AugmentedPattern | None = None  # built from the first stiffness
         self._checked_states = b""  # pair states of the last pivot-checked matrix
 
@@ -92,6 +101,8 @@ class GapConstraints(SupportConstraints):
         # does not make the matrix singular, and the converged state is unchanged
         k = (self.stabilization * float(abs(K.diagonal()).max())
              if self.stabilization > 0.0 else 0.0)
+        if self.settle_cycles and self.augmentation is None:
+            self.augmentation = self._interface_stiffness(K)
         if self._pattern is None or not self._pattern.fits(K):
             K = canonical_csr(K)
             self._pattern = AugmentedPattern(K, self.C, self.fixed, self._CtC)
@@ -107,6 +118,13 @@ class GapConstraints(SupportConstraints):
         factor = factorize(A, check_pivots=states != self._checked_states)
         self._checked_states = states
         return factor
+
+    def _interface_stiffness(self, K: sp.spmatrix) -> float:
+        """The median diagonal stiffness (N/mm) of the equations the pairs connect: the
+        augmentation r of the semismooth pair states."""
+        touched = np.unique(self.C.tocoo().col)
+        diagonal = np.abs(K.diagonal()[touched])
+        return float(np.median(diagonal[diagonal > 0.0])) if np.any(diagonal > 0.0) else 1.0
 
     def reference_rhs(self, reference: np.ndarray) -> np.ndarray:
         return reference_rhs(reference, self.n_pairs, self.fixed)
@@ -138,6 +156,9 @@ class GapConstraints(SupportConstraints):
         old = self.state
         new, _ = update_states(old, old.lam_N + d_N, old.lam_T + d_T, gap_N, gap_T, self.mu,
                                reverse_slip=self.reverse_slip)
+        if self.settle_cycles:  # Newton: no freezing
+            self.state = self._settle_cycles(old, new, gap_N, gap_T)
+            return int(np.count_nonzero(self.state.state != old.state))
         changed = (new.state != old.state) | (new.lam_T * old.lam_T < 0)
         # A pair that keeps changing state within one step (a limit cycle such as
         # fixed -> free -> fixed -> slip -> fixed) is frozen in its current state for the
@@ -152,6 +173,17 @@ class GapConstraints(SupportConstraints):
         self.frozen_pairs = int(np.count_nonzero(self.changes_in_step >= self.max_changes))
         self.state = new
         return int(np.count_nonzero(changed))
+
+    def _settle_cycles(self, old: GapState, new: GapState, gap_N: np.ndarray,
+                       gap_T: np.ndarray) -> GapState:
+        """Table 3.2's transitions, except for the pairs that have switched between held and
+        open CYCLE_TOGGLES times in this step (interface.gap.settle_cycling_pairs)."""
+        self.changes_in_step += (old.state != FREE) != (new.state != FREE)
+        cycling = self.changes_in_step >= CYCLE_TOGGLES
+        if not cycling.any():
+            return new
+        return settle_cycling_pairs(old, new, cycling, gap_N, gap_T, self.mu,
+                                    self.augmentation)
 
     def counts(self) -> dict[str, int]:
         counts = {f"gap_{name}": n for name, n in count_states(self.committed).items()}

@@ -123,8 +123,10 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
     if settings.scheme == "newton" and hasattr(constraints, "stabilization"):
         # Newton solves the contact conditions with the displacements: no pair is frozen,
         # and no spring stands in the matrix that is not in the residual (it would make the
-        # tangent inexact: CF-4's elastic step then converged linearly, 1 % per iteration)
+        # tangent inexact: CF-4's elastic step then converged linearly, 1 % per iteration);
+        # a pair that keeps switching between held and open is decided semismoothly instead
         constraints.stabilization = 0.0
+        constraints.settle_cycles = True
         constraints.max_changes = np.iinfo(np.int64).max
     problem = Problem(structure, constraints, model.reference_load, model.preload,
                       model.control_equation, lambda states: point_flags(groups, states),

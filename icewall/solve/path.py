@@ -50,6 +50,12 @@ NEAR_CRACKING = 0.8
 """Points whose largest principal strain exceeds this fraction of their cracking strain (or
 that have cracked) form the opening control's set."""
 
+STILL = 1e-9
+"""A converged step that changes the deflection by less than this fraction of the increment
+and the load factor by less than this fraction of itself has not moved the path."""
+STAGNANT_STEPS = 5
+"""Consecutive steps that do not move the path after which the run stops (stagnation)."""
+
 
 def _controller(settings: SolverSettings, largest: float) -> StepSizeController:
     return StepSizeController(largest=largest,
@@ -102,7 +108,8 @@ class _Path:
         e, q = np.concatenate(elements), np.concatenate(points)
         weights = kin.dV[e, q]
         control = OpeningControl(kin.B[e, q], kin.dofs[e], weights, 0.0, 0.0)
-        return replace(control, start=control.opening(self.state.u),
+        reference = largest_principal(control._strains(self.state.u))[0]
+        return replace(control, reference=reference,
                        increment=fraction * float(weights @ np.concatenate(scales)))
 
 
@@ -148,7 +155,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         size, release = resume[0], resume[1]
         mode = "opening" if resume[2] else "displacement"
     path = _Path(problem, state, preload)
-    last_increment = None
+    last_increment, stagnant = None, 0
     while -float(state.u[problem.control_equation]) < settings.target - 1e-12 * max(
             1.0, settings.target):
         current = -float(state.u[problem.control_equation])
@@ -186,11 +193,19 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         inc.wall_time = time.perf_counter() - tic
         d_deflection = inc.control_displacement - current
         d_load = inc.load_factor - state.load_factor
+        still = abs(d_deflection) <= STILL * max(settings.increment, 1e-30) and abs(
+            d_load) <= STILL * max(abs(state.load_factor), 1e-30)
+        stagnant = stagnant + 1 if still else 0
+        if stagnant >= STAGNANT_STEPS:
+            raise ConvergenceError(f"the path no longer moves at {where}: {stagnant} converged "
+                                   "steps in a row changed neither the deflection nor the "
+                                   "load", reason="stagnation")
         if mode == "opening":
             inc.snap_back = d_deflection < 0.0
             growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
             release *= min(2.0, max(0.5, growth))
-            if d_deflection > 0.0 and d_load > 0.0:  # rising again: back to the deflection
+            # a step met within the tolerance at once moved too little to tell the way
+            if d_deflection > 0.0 and d_load > 0.0 and inc.iterations > 1:
                 mode, size = "displacement", max(steps.smallest, min(steps.largest,
                                                                      d_deflection))
         else:

@@ -141,3 +141,56 @@ def test_opening_control_gradient_and_correction():
     q1, q2 = rng.normal(size=n), rng.normal(size=n)
     dP = target.correction(u, 0.0, q1, q2)
     assert target.residual(u, 0.0) + g @ (dP * q1 + q2) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_opening_growth_counts_only_points_that_open_further():
+    """With a reference (the largest strains at the start of the increment) the opening is the
+    weighted growth beyond it: points that close do not offset those that open, so the
+    control grows through a snap-back where one crack opens while its neighbours unload."""
+    from icewall.solve.controls import OpeningControl, largest_principal
+
+    rng = np.random.default_rng(11)
+    m, nd, n = 6, 8, 24
+    B = rng.normal(size=(m, 4, nd))
+    dofs = rng.integers(0, n, size=(m, nd))
+    weights = rng.uniform(0.5, 2.0, m)
+    u0 = rng.normal(size=n)
+    plain = OpeningControl(B, dofs, weights, start=0.0, increment=0.0)
+    reference = largest_principal(plain._strains(u0))[0]
+    growth = replace(plain, reference=reference)
+    assert growth.opening(u0) == 0.0
+    u = u0 + 0.05 * rng.normal(size=n)
+    change = largest_principal(plain._strains(u))[0] - reference
+    assert (change > 0).any() and (change < 0).any()
+    assert growth.opening(u) == pytest.approx(float(weights @ np.maximum(change, 0.0)))
+    # its gradient: central differences away from the points that sit on their reference
+    h = 1e-7
+    fd = np.array([(growth.opening(u + h * e) - growth.opening(u - h * e)) / (2 * h)
+                   for e in np.eye(n)])
+    assert np.allclose(growth.gradient(u), fd, rtol=1e-5, atol=1e-7)
+    # at the start every point counts (the one-sided derivative along an opening direction)
+    assert np.allclose(growth.gradient(u0), plain.gradient(u0))
+
+
+def test_a_path_that_no_longer_moves_stops_with_a_reason(monkeypatch):
+    """Converged steps that change neither deflection nor load (a step met within the
+    tolerance at once, over and over) end the run with reason "stagnation" instead of
+    looping."""
+    import icewall.solve.path as path_module
+    from icewall.solve.control import Increment
+
+    problem, initial = newton_bar(100.0, 4)
+
+    calls = []
+
+    def standing_still(problem, settings, state, control, preload, **_):
+        calls.append(1)
+        assert len(calls) < 50, "the path loops without moving"
+        return Increment("control", -float(state.u[problem.control_equation]),
+                         state.load_factor, preload, 1, 0.0, 0.0,
+                         problem.structure.evaluate(state.u, state.states), state.u.copy(), {})
+
+    monkeypatch.setattr(path_module, "newton_increment", standing_still)
+    with pytest.raises(ConvergenceError, match="no longer moves") as info:
+        list(follow_path(problem, newton_settings(0.5, 0.05), initial))
+    assert info.value.reason == "stagnation"
