@@ -2,8 +2,11 @@
 
 Backends: SciPy's SuperLU (always there), UMFPACK (scikit-umfpack) and MKL PARDISO (pypardiso),
 the latter two optional (extra `fast`). `ICEWALL_SPARSE_SOLVER` = superlu | umfpack | pardiso |
-auto chooses one (auto: umfpack, pardiso, superlu, the first installed); the default is
-superlu with the MMD_AT_PLUS_A ordering (`ICEWALL_SUPERLU_ORDERING` changes it). A requested
+auto chooses one; the default is superlu with the MMD_AT_PLUS_A ordering
+(`ICEWALL_SUPERLU_ORDERING` changes it). auto chooses by the size of the matrix (choose_for,
+measured on Newton iteration matrices: docs/solver_backends.md): from AUTO_LARGE_ROWS rows up
+PARDISO, else UMFPACK; otherwise SuperLU with COLAMD (below AUTO_ORDERING_ROWS) or MMD_ATA.
+Asked without a size, auto is the first installed of umfpack, pardiso, superlu. A requested
 optional backend that is not installed falls back to SuperLU with a warning, never an error.
 
 Why the default is the old SuperLU call: it reproduces earlier results bit for bit, and the
@@ -21,6 +24,7 @@ import os
 import warnings
 from abc import ABC, abstractmethod
 from functools import cache, cached_property
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -36,6 +40,13 @@ _MODULES = {"umfpack": "scikits.umfpack", "pardiso": "pypardiso"}
 # default COLAMD ordering on a 10 000-element quad8 mesh.
 SUPERLU_OPTIONS = {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 1e-3,
                    "options": {"SymmetricMode": True}}
+# ICEWALL_SPARSE_SOLVER=auto (choose_for), from benchmarks/bench_backends.py on Newton matrices
+# (docs/solver_backends.md). SuperLU: COLAMD below AUTO_ORDERING_ROWS rows (5-15 % ahead of
+# MMD_ATA at 2 000), MMD_ATA from there up (~22 % less time than COLAMD at 10 000 and 40 000);
+# MMD_AT_PLUS_A, the default, is up to 16x slower than either. PARDISO (one MKL thread) ties
+# SuperLU MMD_ATA at 10 000 rows and takes 0.55x of its time at 40 000.
+AUTO_LARGE_ROWS = 10_000
+AUTO_ORDERING_ROWS = 5_000
 # Backends without pivot access: relative residual |A x - b| / (|A| |x| + |b|) above which a
 # solution is rejected as that of a singular matrix.
 RESIDUAL_RTOL = 1e-8
@@ -61,7 +72,9 @@ def installed(backend: str) -> bool:
     if backend == "superlu":
         return True
     try:
-        importlib.import_module(_MODULES[backend])
+        module = importlib.import_module(_MODULES[backend])
+        if backend == "umfpack":  # a build against other headers imports without its solvers
+            module.UmfpackContext("di")
     except Exception:  # a broken optional install counts as absent
         return False
     return True
@@ -72,11 +85,35 @@ def available_backends() -> tuple[str, ...]:
     return tuple(b for b in BACKENDS if installed(b))
 
 
-def choose_backend(requested: str | None = None) -> str:
-    """`requested`, else $ICEWALL_SPARSE_SOLVER, else superlu; auto = the best installed
-    (umfpack, pardiso, superlu). An absent optional backend falls back to superlu."""
+class Choice(NamedTuple):
+    """A backend and, for SuperLU, its column ordering (None: superlu_options())."""
+
+    backend: str
+    ordering: str | None = None
+
+
+def choose_for(n_rows: int) -> Choice:
+    """The fastest installed backend for an iteration matrix of `n_rows` rows (measured on
+    Newton matrices, docs/solver_backends.md): from AUTO_LARGE_ROWS rows up pardiso, else
+    umfpack; otherwise SuperLU, ordered by COLAMD below AUTO_ORDERING_ROWS rows and MMD_ATA
+    from there up ($ICEWALL_SUPERLU_ORDERING, if set, wins)."""
+    if n_rows >= AUTO_LARGE_ROWS:
+        for backend in ("pardiso", "umfpack"):
+            if installed(backend):
+                return Choice(backend)
+    if os.environ.get(ORDERING_VARIABLE, "").strip():
+        return Choice("superlu")
+    return Choice("superlu", "COLAMD" if n_rows < AUTO_ORDERING_ROWS else "MMD_ATA")
+
+
+def choose_backend(requested: str | None = None, n_rows: int | None = None) -> str:
+    """`requested`, else $ICEWALL_SPARSE_SOLVER, else superlu; auto = choose_for(n_rows), or
+    without a size the first installed of umfpack, pardiso, superlu. An absent optional
+    backend falls back to superlu."""
     name = (requested or os.environ.get(ENVIRONMENT_VARIABLE) or "superlu").strip().lower()
     if name == "auto":
+        if n_rows is not None:
+            return choose_for(n_rows).backend
         return next(b for b in ("umfpack", "pardiso", "superlu") if installed(b))
     if name not in BACKENDS:
         raise ValueError(f"unknown sparse solver {name!r}; expected auto or one of {BACKENDS}")
@@ -126,12 +163,14 @@ class SuperLUFactor(SparseLU):
     """scipy.sparse.linalg.splu with superlu_options(); pivots are checked against a scale."""
 
     def __init__(self, A: sp.csc_matrix, pivot_scale: np.ndarray | None,
-                 pivot_rtol: float) -> None:
+                 pivot_rtol: float, ordering: str | None = None) -> None:
         super().__init__(A)
+        options = superlu_options() if ordering is None else {**SUPERLU_OPTIONS,
+                                                              "permc_spec": ordering}
         with warnings.catch_warnings():
             warnings.simplefilter("error", spla.MatrixRankWarning)
             try:
-                self.lu = spla.splu(A, **superlu_options())
+                self.lu = spla.splu(A, **options)
             except (RuntimeError, spla.MatrixRankWarning) as exc:
                 raise SingularMatrixError(str(exc)) from exc
         if pivot_scale is not None:
@@ -225,16 +264,18 @@ class PardisoFactor(SparseLU):
 
 def factorize(A: sp.spmatrix, backend: str | None = None,
               pivot_scale: np.ndarray | None = None, pivot_rtol: float = 1e-12) -> SparseLU:
-    """LU factors of A with the chosen backend (see choose_backend).
+    """LU factors of A with the chosen backend (see choose_backend; auto: choose_for with the
+    size of A, and SuperLU then with its ordering).
 
     SuperLU also rejects pivots |U_jj| <= pivot_rtol * pivot_scale[j] (column j of A) when a
     scale is given; the others have no pivot access: check their solutions (accurate).
     Raises SingularMatrixError.
     """
     A = sp.csc_matrix(A)
-    name = choose_backend(backend)
-    if name == "umfpack":
+    name = (backend or os.environ.get(ENVIRONMENT_VARIABLE) or "superlu").strip().lower()
+    choice = choose_for(A.shape[0]) if name == "auto" else Choice(choose_backend(name))
+    if choice.backend == "umfpack":
         return UmfpackFactor(A)
-    if name == "pardiso":
+    if choice.backend == "pardiso":
         return PardisoFactor(A)
-    return SuperLUFactor(A, pivot_scale, pivot_rtol)
+    return SuperLUFactor(A, pivot_scale, pivot_rtol, choice.ordering)
