@@ -60,6 +60,7 @@ class SupportConstraints:
     """Homogeneous supports only: u[fixed] = 0. No multipliers."""
 
     n_multipliers = 0
+    sparse_backend: str | None = None  # icewall.solve.sparse: None = $ICEWALL_SPARSE_SOLVER
 
     def __init__(self, n_equations: int, fixed: np.ndarray) -> None:
         self.n_equations = n_equations
@@ -89,7 +90,8 @@ class SupportConstraints:
     def factorize(self, K: sp.spmatrix) -> Factorization:
         """Factorisation of the iteration matrix for the current constraint states."""
         return Factorization(restricted_matrix(K, self.fixed),
-                             " - a rigid-body mode is not restrained: check supports")
+                             " - a rigid-body mode is not restrained: check supports",
+                             self.sparse_backend)
 
     def reference_rhs(self, reference: np.ndarray) -> np.ndarray:
         """RHS of eq. 3.46: R* on the free equations, zero in any multiplier rows (errata §3)."""

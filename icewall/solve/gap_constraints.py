@@ -115,7 +115,8 @@ class GapConstraints(SupportConstraints):
         # its floored secants, does not make the matrix singular; SuperLU still reports an
         # exactly singular one and every solve checks its residual).
         states = self.state.state.tobytes()
-        factor = factorize(A, check_pivots=states != self._checked_states)
+        factor = factorize(A, self.sparse_backend,
+                           check_pivots=states != self._checked_states)
         self._checked_states = states
         return factor
 

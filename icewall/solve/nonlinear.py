@@ -4,6 +4,7 @@ each converged increment reports (counts, energies, forensics)."""
 from __future__ import annotations
 
 import functools
+import os
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, fields, replace
 from typing import Any
@@ -15,6 +16,7 @@ from icewall.materials.orthotropic import local_normal_components
 from icewall.model.build import Model
 from icewall.model.materials import MaterialGroup, build_groups
 from icewall.model.structure import Evaluation, Structure
+from icewall.solve import sparse
 from icewall.solve.constraints import SupportConstraints
 from icewall.solve.control import Increment, PathState, Problem, follow_path
 from icewall.solve.energy import EnergyAccount, secant_elastic_energy
@@ -120,6 +122,10 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
     structure = Structure(model.kinematics, model.assembler, groups)
     constraints = make_constraints(model, structure)
     settings = solver_settings(deck)
+    if settings.scheme == "newton" and not os.environ.get(sparse.ENVIRONMENT_VARIABLE):
+        # the fastest factorisation for the size (docs/solver_backends.md); the secant
+        # scheme keeps the old call, which reproduces its earlier results bit for bit
+        constraints.sparse_backend = "auto"
     if settings.scheme == "newton" and hasattr(constraints, "stabilization"):
         # Newton solves the contact conditions with the displacements: no pair is frozen,
         # and no spring stands in the matrix that is not in the residual (it would make the
