@@ -44,9 +44,12 @@ class PathState:
     evaluation: Evaluation | None = None
     preload_factor: float = 0.0  # fraction of the in-plane preload applied
     load_scale: float = 0.0  # largest external-load norm reached: the eq. 4.5 reference
-    # (stage, position reached, next step size, peak load factor): where _advance would go on
-    # from here; follow_path(..., resume=True) continues an interrupted run from it
+    # (stage, position reached, next step size, peak load factor, jumps made): where _advance
+    # would go on from here (the Newton path keeps its own numbers: path.py); the checkpoint
+    # holds it whole, and follow_path(..., resume=True) continues an interrupted run from it
     resume: tuple = ()
+    # the displacements of the increment that led here (the Newton predictor's direction)
+    last_increment: np.ndarray | None = None
 
 
 @dataclass
@@ -247,10 +250,10 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
                else state.preload_factor)
     size = step_size
     peak_load = state.load_factor
-    if resume:
-        current, size, peak_load = resume
-    retry = 0  # fallback iteration schemes tried on the smallest step (FALLBACKS)
     jumps, jumping = 0, False  # steps over a stall so far; this attempt is one
+    if resume:  # the checkpoint holds the counter too: a resumed run makes no extra jumps
+        current, size, peak_load, jumps = resume[0], resume[1], resume[2], int(resume[3])
+    retry = 0  # fallback iteration schemes tried on the smallest step (FALLBACKS)
     while current < target - 1e-12 * max(1.0, abs(target)):
         goal = min(current + size, target)
         tic = time.perf_counter()
@@ -316,7 +319,7 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
         current = goal
         size = min(step_size, 2.0 * size)  # grow back after a successful cut step
         state = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
-                          inc.preload_factor, scale, (kind, current, size, peak_load))
+                          inc.preload_factor, scale, (kind, current, size, peak_load, jumps))
         yield inc, state
 
 

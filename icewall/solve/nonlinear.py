@@ -172,12 +172,14 @@ def take_checkpoint(path: PathState, constraints, energy: EnergyAccount
     load and preload factors, eq. 4.5 reference, where the path goes on), the Gauss-point
     states of every group, the interface pair states and the energy account."""
     ev = path.evaluation
-    stage, position, size, peak = path.resume
+    stage, *where = path.resume  # the path's own counters too (control.py, path.py)
     out: dict[str, np.ndarray] = {
         "path/u": path.u, "path/load_factor": path.load_factor,
         "path/preload_factor": path.preload_factor, "path/load_scale": path.load_scale,
-        "path/stage": np.array(stage), "path/position": position, "path/size": size,
-        "path/peak_load": peak, "previous/stress": ev.stress, "previous/strain": ev.strain,
+        "path/stage": np.array(stage), "path/where": np.array(where, dtype=float),
+        "previous/stress": ev.stress, "previous/strain": ev.strain,
+        "path/last_increment": (np.zeros(0) if path.last_increment is None
+                                else path.last_increment),
         "energy/external_work": energy.external_work,
         "energy/friction_work": energy.friction_work}
     for kind in ("internal_work", "elastic_energy"):
@@ -190,6 +192,8 @@ def take_checkpoint(path: PathState, constraints, energy: EnergyAccount
     if gap is not None:
         out.update({f"gap/{f.name}": getattr(gap, f.name) for f in fields(gap)
                     if f.name != "transitions" and getattr(gap, f.name) is not None})
+    if getattr(constraints, "augmentation", None) is not None:  # fixed for the whole run
+        out["constraints/augmentation"] = constraints.augmentation
     return {name: np.asarray(value) for name, value in out.items()}
 
 
@@ -213,6 +217,8 @@ def restore_checkpoint(data: dict[str, np.ndarray], structure: Structure, constr
                 for f in fields(gap) if f.name != "transitions"
                 and getattr(gap, f.name) is not None})
             constraints.state = constraints.committed
+        if "constraints/augmentation" in data:
+            constraints.augmentation = float(data["constraints/augmentation"])
         energy.external_work = float(data["energy/external_work"])
         energy.friction_work = float(data["energy/friction_work"])
         for name, value in data.items():
@@ -220,11 +226,11 @@ def restore_checkpoint(data: dict[str, np.ndarray], structure: Structure, constr
             if name.startswith("energy/") and group:
                 getattr(energy, kind)[group] = float(value)
         u = _same_shape(data["path/u"], np.zeros(structure.assembler.n_dofs), "path/u")
-        resume = (str(data["path/stage"]), float(data["path/position"]),
-                  float(data["path/size"]), float(data["path/peak_load"]))
+        resume = (str(data["path/stage"]), *map(float, data["path/where"]))
+        last = data["path/last_increment"]
         path = PathState(u, float(data["path/load_factor"]), tuple(states), None,
                          float(data["path/preload_factor"]), float(data["path/load_scale"]),
-                         resume)
+                         resume, last if last.size else None)
         return path, data["previous/stress"], data["previous/strain"]
     except KeyError as exc:
         raise ResultError(f"the checkpoint lacks {exc.args[0]!r}: not one of this model") from None

@@ -131,7 +131,7 @@ def _advance_preload(problem: Problem, settings: SolverSettings, state: PathStat
         c.commit()
         inc.wall_time = time.perf_counter() - tic
         current, size = goal, steps.after_success(size, inc.iterations)
-        state = _next_state(problem, state, inc, ("preload", current, size, 0.0))
+        state = _next_state(problem, state, inc, ("preload", current, size, 0.0, 0.0))
         yield inc, state
 
 
@@ -150,12 +150,13 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
     """Displacement control to the target, the snap-back control through snap-backs."""
     c = problem.constraints
     steps = _controller(settings, settings.increment)
-    size, mode, release = steps.largest, "displacement", 0.0
-    if resume:  # (size, release, 1.0 while under the snap-back control): _next_state below
+    size, mode, release, stagnant = steps.largest, "displacement", 0.0, 0
+    if resume:  # (size, release, 1.0 under the snap-back control, stagnant steps): below
         size, release = resume[0], resume[1]
         mode = "opening" if resume[2] else "displacement"
+        stagnant = int(resume[3])
     path = _Path(problem, state, preload)
-    last_increment, stagnant = None, 0
+    last_increment = state.last_increment
     while -float(state.u[problem.control_equation]) < settings.target - 1e-12 * max(
             1.0, settings.target):
         current = -float(state.u[problem.control_equation])
@@ -212,7 +213,8 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             size = steps.after_success(size, inc.iterations)
         last_increment = inc.u - state.u
         state = _next_state(problem, state, inc, ("control", size, release,
-                                                  float(mode == "opening")))
+                                                  float(mode == "opening"), float(stagnant)))
+        state.last_increment = last_increment
         path.state = state
         yield inc, state
 

@@ -111,6 +111,23 @@ def test_resume_when_killed_between_the_step_and_its_checkpoint(cf4_uninterrupte
     assert_identical(whole.path, resumed.path)
 
 
+NEWTON = ["analysis.scheme=newton", "analysis.tolerance_load=1e-4",
+          "analysis.tolerance_displacement=1e-4", "loads.control.target=5.3", FIELDS]
+
+
+def test_newton_resume_ends_bit_identical(tmp_path):
+    """The Newton path's own state (step size, snap-back control, the predictor's direction,
+    the augmentation of the semismooth pair decisions) is in the checkpoint: a run resumed
+    at step 13 of 21 (after a snap-back at 5.3 mm) ends on the same bits."""
+    loaded = load_deck(DECKS / "cf4.yaml", NEWTON)
+    whole = run_deck(loaded, tmp_path / "whole" / "cf4.h5")
+    assert whole.status == "completed"
+    out = tmp_path / "cut" / "cf4.h5"
+    with pytest.raises(Interrupted):
+        run_deck(loaded, out, progress=_interrupt_after(13))
+    assert_identical(whole.path, run_deck(loaded, out, resume=True).path)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("k", [2, 5, 6])  # in the preload stage, at its end, after it
 def test_resume_through_the_preload_stage(tmp_path, k):
