@@ -119,25 +119,29 @@ def test_step_size_controller_aims_at_the_target_iterations():
         steps.after_failure(1.0 / 64, "control 3", "non-convergence", "no convergence")
 
 
+def _random_opening(seed: int, m: int, n: int):
+    """An opening control of m random points (8 dofs each) over n equations, a random u."""
+    from icewall.solve.controls import OpeningControl
+
+    rng = np.random.default_rng(seed)
+    B = rng.normal(size=(m, 4, 8))
+    dofs = rng.integers(0, n, size=(m, 8))
+    control = OpeningControl(B, dofs, rng.uniform(0.5, 2.0, m), start=0.0, increment=0.0)
+    return control, rng.normal(size=n), rng
+
+
 def test_opening_control_gradient_and_correction():
     """The opening (sum of weighted largest principal strains) against central differences,
     and the bordered load-factor correction that meets its target for a linear response."""
-    from icewall.solve.controls import OpeningControl
-
-    rng = np.random.default_rng(7)
-    m, nd, n = 5, 8, 20
-    B = rng.normal(size=(m, 4, nd))
-    dofs = rng.integers(0, n, size=(m, nd))
-    weights = rng.uniform(0.5, 2.0, m)
-    u = rng.normal(size=n)
-    control = OpeningControl(B, dofs, weights, start=0.0, increment=0.0)
+    control, u, rng = _random_opening(7, 5, 20)
+    n = u.size
     g = control.gradient(u)
     h = 1e-6
     fd = np.array([(control.opening(u + h * e) - control.opening(u - h * e)) / (2 * h)
                    for e in np.eye(n)])
     assert np.allclose(g, fd, rtol=1e-6, atol=1e-8)
     # du = dP q1 + q2 with the correction: the linearised opening meets its target
-    target = OpeningControl(B, dofs, weights, control.opening(u), 0.3)
+    target = replace(control, start=control.opening(u), increment=0.3)
     q1, q2 = rng.normal(size=n), rng.normal(size=n)
     dP = target.correction(u, 0.0, q1, q2)
     assert target.residual(u, 0.0) + g @ (dP * q1 + q2) == pytest.approx(0.0, abs=1e-12)
@@ -147,15 +151,10 @@ def test_opening_growth_counts_only_points_that_open_further():
     """With a reference (the largest strains at the start of the increment) the opening is the
     weighted growth beyond it: points that close do not offset those that open, so the
     control grows through a snap-back where one crack opens while its neighbours unload."""
-    from icewall.solve.controls import OpeningControl, largest_principal
+    from icewall.solve.controls import largest_principal
 
-    rng = np.random.default_rng(11)
-    m, nd, n = 6, 8, 24
-    B = rng.normal(size=(m, 4, nd))
-    dofs = rng.integers(0, n, size=(m, nd))
-    weights = rng.uniform(0.5, 2.0, m)
-    u0 = rng.normal(size=n)
-    plain = OpeningControl(B, dofs, weights, start=0.0, increment=0.0)
+    plain, u0, rng = _random_opening(11, 6, 24)
+    n, weights = u0.size, plain.weights
     reference = largest_principal(plain._strains(u0))[0]
     growth = replace(plain, reference=reference)
     assert growth.opening(u0) == 0.0
