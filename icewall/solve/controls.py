@@ -92,7 +92,8 @@ class OpeningControl:
     increment: float
     reference: np.ndarray | None = None  # (m,) largest strains at the start: growth only
 
-    def _strains(self, u: np.ndarray) -> np.ndarray:
+    def strains(self, u: np.ndarray) -> np.ndarray:
+        """The chosen points' strains (m, 4)."""
         return np.einsum("mij,mj->mi", self.B, u[self.dofs])
 
     def _growing(self, largest: np.ndarray) -> np.ndarray:
@@ -101,7 +102,7 @@ class OpeningControl:
         return largest >= self.reference
 
     def opening(self, u: np.ndarray) -> float:
-        largest = largest_principal(self._strains(u))[0]
+        largest = largest_principal(self.strains(u))[0]
         if self.reference is not None:
             largest = np.maximum(largest - self.reference, 0.0)
         return float(self.weights @ largest)
@@ -111,7 +112,7 @@ class OpeningControl:
 
     def gradient(self, u: np.ndarray) -> np.ndarray:
         """d opening / d u (n_eq,)."""
-        largest, d_eps = largest_principal(self._strains(u))
+        largest, d_eps = largest_principal(self.strains(u))
         weights = np.where(self._growing(largest), self.weights, 0.0)
         local = np.einsum("m,mi,mij->mj", weights, d_eps, self.B)
         return np.bincount(self.dofs.ravel(), local.ravel(), minlength=u.size)[:u.size]

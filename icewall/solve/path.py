@@ -108,7 +108,7 @@ class _Path:
         e, q = np.concatenate(elements), np.concatenate(points)
         weights = kin.dV[e, q]
         control = OpeningControl(kin.B[e, q], kin.dofs[e], weights, 0.0, 0.0)
-        reference = largest_principal(control._strains(self.state.u))[0]
+        reference = largest_principal(control.strains(self.state.u))[0]
         return replace(control, reference=reference,
                        increment=fraction * float(weights @ np.concatenate(scales)))
 
@@ -197,10 +197,6 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         still = abs(d_deflection) <= STILL * max(settings.increment, 1e-30) and abs(
             d_load) <= STILL * max(abs(state.load_factor), 1e-30)
         stagnant = stagnant + 1 if still else 0
-        if stagnant >= STAGNANT_STEPS:
-            raise ConvergenceError(f"the path no longer moves at {where}: {stagnant} converged "
-                                   "steps in a row changed neither the deflection nor the "
-                                   "load", reason="stagnation")
         if mode == "opening":
             inc.snap_back = d_deflection < 0.0
             growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
@@ -217,6 +213,10 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         state.last_increment = last_increment
         path.state = state
         yield inc, state
+        if stagnant >= STAGNANT_STEPS:  # after the step is on disk, as every converged one
+            raise ConvergenceError(f"the path no longer moves at {where}: {stagnant} converged "
+                                   "steps in a row changed neither the deflection nor the "
+                                   "load", reason="stagnation")
 
 
 def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,

@@ -155,11 +155,11 @@ def test_opening_growth_counts_only_points_that_open_further():
 
     plain, u0, rng = _random_opening(11, 6, 24)
     n, weights = u0.size, plain.weights
-    reference = largest_principal(plain._strains(u0))[0]
+    reference = largest_principal(plain.strains(u0))[0]
     growth = replace(plain, reference=reference)
     assert growth.opening(u0) == 0.0
     u = u0 + 0.05 * rng.normal(size=n)
-    change = largest_principal(plain._strains(u))[0] - reference
+    change = largest_principal(plain.strains(u))[0] - reference
     assert (change > 0).any() and (change < 0).any()
     assert growth.opening(u) == pytest.approx(float(weights @ np.maximum(change, 0.0)))
     # its gradient: central differences away from the points that sit on their reference
