@@ -58,6 +58,11 @@ bench: $(STAMP)  ## benchmarks, outside the test suite; tables printed, CSV in b
 	$(BIN)/python benchmarks/bench_scaling.py --backends superlu superlu:COLAMD
 	ICEWALL_SPARSE_SOLVER=auto ICEWALL_SUPERLU_ORDERING=COLAMD $(BIN)/python \
 	    benchmarks/bench_scaling.py --backends superlu:COLAMD --csv scaling_fast.csv
+	$(BIN)/python benchmarks/bench_backends.py capture --name cf4_50mm --deck decks/cf4.yaml \
+	    --set analysis.scheme=newton --set analysis.tolerance_load=0.0001 \
+	    --set analysis.tolerance_displacement=0.0001 --set analysis.max_iterations=40 \
+	    --set 'outputs.fields=[]' --set loads.control.target=4 --every 6 --max 12
+	MKL_NUM_THREADS=1 $(BIN)/python benchmarks/bench_backends.py time --repeats 5
 	test -x $(PEERS_VENV)/bin/python || bash ../shared/bench-peers/setup_venv.sh $(PEERS_VENV)
 	$(BIN)/python benchmarks/bench_peers.py --peers-python $(PEERS_VENV)/bin/python
 
