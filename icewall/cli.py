@@ -68,14 +68,16 @@ def _fail(message: str, exit_code: int, prefix: str = "error: ") -> None:
 
 
 def _warn_resources(loaded, output_dir: str | None = None) -> None:
-    """Warn (stderr) about a long run; refuse (exit 2) a result larger than the free disk of
-    `output_dir` [default outputs.directory] unless analysis.allow_large."""
+    """Warn (stderr) about a long run and a scheme that the deck's settings keep from
+    converging; refuse (exit 2) a result larger than the free disk of `output_dir` [default
+    outputs.directory] unless analysis.allow_large."""
     from icewall.deck.resources import estimate, output_refusal, warnings_for
     from icewall.errors import DeckError
+    from icewall.solve.settings import scheme_warnings
 
     deck = loaded.deck
     est = estimate(deck)
-    for warning in warnings_for(deck, est):
+    for warning in [*warnings_for(deck, est), *scheme_warnings(deck)]:
         click.echo(f"warning: {loaded.path}: {warning}", err=True)
     problem = output_refusal(deck, output_dir or deck.outputs.directory, est)
     if problem and deck.analysis.allow_large:

@@ -41,3 +41,14 @@ def solver_settings(deck: Deck) -> SolverSettings:
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
         on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps,
         scheme=a.scheme)
+
+
+def scheme_warnings(deck: Deck) -> list[str]:
+    """One line each: deck settings under which the chosen scheme is known not to converge."""
+    if (deck.analysis.scheme == "newton" and deck.analysis.solver != "linear"
+            and deck.materials.concrete.compression_tension_rule == "equal"):
+        return ["analysis.scheme newton with materials.concrete.compression_tension_rule "
+                "equal: rule (b) makes the compressive strength jump where a principal stress "
+                "changes sign, and Newton need not converge there (docs/solver.md, item 7); "
+                "floor is the errata's continuous reading"]
+    return []

@@ -103,3 +103,21 @@ def test_unwritable_output_fails_before_computing(tmp_path, monkeypatch):
     assert "cannot create the output directory" in result.output
     assert "Traceback" not in result.output
     assert called == []  # nothing was meshed or solved
+
+
+def test_check_warns_when_the_newton_scheme_meets_the_discontinuous_rule_b():
+    """`icewall check` says, in one line, that Newton with rule (b) read `equal` need not
+    converge (docs/solver.md item 7); with `floor`, or with the secant scheme, it says
+    nothing of it."""
+    from pathlib import Path
+
+    deck = str(Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml")
+    runner = CliRunner()
+    newton = runner.invoke(main, ["check", deck, "--set", "analysis.scheme=newton"])
+    assert newton.exit_code == 0
+    lines = [line for line in newton.output.splitlines() if "compression_tension_rule" in line]
+    assert len(lines) == 1 and lines[0].startswith("warning: ") and "floor" in lines[0]
+    for extra in (["--set", "analysis.scheme=newton", "--set",
+                   "materials.concrete.compression_tension_rule=floor"], []):
+        quiet = runner.invoke(main, ["check", deck, *extra])
+        assert quiet.exit_code == 0 and "compression_tension_rule" not in quiet.output
