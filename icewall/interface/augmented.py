@@ -35,7 +35,9 @@ PIVOT_RTOL = 1e-12
 REFINE_RTOL = 1e-14
 
 SINGULAR_HINT = ("a concrete core (or steel part) may have no active interface pair (all FREE) "
-                 "and float: add fixed points (choose_fixed_points) or check the supports")
+                 "and float: add fixed points (choose_fixed_points) or check the supports; or, "
+                 "with the Newton scheme's tangent, the concrete around those unknowns has "
+                 "lost its stiffness (crushed and cracked: docs/solver.md, item 9)")
 
 
 def active_rows(state: GapState) -> np.ndarray:
