@@ -166,6 +166,13 @@ def update_states(state: GapState, lam_N: np.ndarray, lam_T: np.ndarray, gap_N: 
     return new_state, sum(counts.values())
 
 
+def _augmented(lam_N: np.ndarray, lam_T: np.ndarray, gap_N: np.ndarray, gap_T: np.ndarray,
+               stick_T: np.ndarray, augmentation: float) -> tuple[np.ndarray, np.ndarray]:
+    """Augmented normal force lam_N + r Delta_N and trial friction force
+    lam_T + r (Delta_T - stick_T) of each pair (Alart & Curnier 1991)."""
+    return lam_N + augmentation * gap_N, lam_T + augmentation * (gap_T - stick_T)
+
+
 def semismooth_states(state: GapState, lam_N: np.ndarray, lam_T: np.ndarray,
                       gap_N: np.ndarray, gap_T: np.ndarray, mu: float,
                       augmentation: float) -> tuple[GapState, int]:
@@ -184,11 +191,9 @@ def semismooth_states(state: GapState, lam_N: np.ndarray, lam_T: np.ndarray,
     lam_N, lam_T = np.asarray(lam_N, float), np.asarray(lam_T, float)
     gap_N, gap_T = np.asarray(gap_N, float), np.asarray(gap_T, float)
     old = state.state
-    normal = lam_N + augmentation * gap_N
-    closed = (normal < 0.0) | state.permanent
-    closing = closed & (old == FREE)
-    stick_T = np.where(closing, gap_T, state.stick_T)
-    trial = lam_T + augmentation * (gap_T - stick_T)
+    closed = (lam_N + augmentation * gap_N < 0.0) | state.permanent
+    stick_T = np.where(closed & (old == FREE), gap_T, state.stick_T)
+    normal, trial = _augmented(lam_N, lam_T, gap_N, gap_T, stick_T, augmentation)
     limit = mu * np.abs(normal)
     slips = closed & ~state.permanent & (np.abs(trial) > limit)
     new = np.where(closed, np.where(slips, SLIP, FIXED), FREE).astype(np.int8)
@@ -214,10 +219,10 @@ def settle_cycling_pairs(old: GapState, new: GapState, cycling: np.ndarray,
     in tension while sliding, it opens)."""
     decided, _ = semismooth_states(old, new.lam_N, new.lam_T, gap_N, gap_T, mu, augmentation)
     reopened = cycling & (decided.state == FREE) & (old.state == FIXED)
-    normal = np.abs(decided.lam_N + augmentation * gap_N)
-    trial = decided.lam_T + augmentation * (gap_T - decided.stick_T)
+    normal, trial = _augmented(decided.lam_N, decided.lam_T, gap_N, gap_T, decided.stick_T,
+                               augmentation)
     state = np.where(reopened, SLIP, decided.state)
-    lam_T = np.where(reopened, np.sign(trial) * mu * normal, decided.lam_T)
+    lam_T = np.where(reopened, np.sign(trial) * mu * np.abs(normal), decided.lam_T)
     return replace(new, state=np.where(cycling, state, new.state).astype(np.int8),
                    lam_T=np.where(cycling, lam_T, new.lam_T),
                    stick_T=np.where(cycling, decided.stick_T, new.stick_T))

@@ -122,18 +122,8 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
     structure = Structure(model.kinematics, model.assembler, groups)
     constraints = make_constraints(model, structure)
     settings = solver_settings(deck)
-    if settings.scheme == "newton" and not os.environ.get(sparse.ENVIRONMENT_VARIABLE):
-        # the fastest factorisation for the size (docs/solver_backends.md); the secant
-        # scheme keeps the old call, which reproduces its earlier results bit for bit
-        constraints.sparse_backend = "auto"
-    if settings.scheme == "newton" and hasattr(constraints, "stabilization"):
-        # Newton solves the contact conditions with the displacements: no pair is frozen,
-        # and no spring stands in the matrix that is not in the residual (it would make the
-        # tangent inexact: CF-4's elastic step then converged linearly, 1 % per iteration);
-        # a pair that keeps switching between held and open is decided semismoothly instead
-        constraints.stabilization = 0.0
-        constraints.settle_cycles = True
-        constraints.max_changes = np.iinfo(np.int64).max
+    if settings.scheme == "newton":
+        _newton_constraints(constraints)
     problem = Problem(structure, constraints, model.reference_load, model.preload,
                       model.control_equation, lambda states: point_flags(groups, states),
                       tuple(g.freezable for g in groups))
@@ -164,6 +154,22 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
         yield StepReport(inc, counts, energy.record(), structure, constraints, model.dof_map,
                          snapshot)
         stress, strain, previous_u, previous_load = ev.stress, ev.strain, inc.u, load
+
+
+def _newton_constraints(constraints: SupportConstraints) -> None:
+    """The constraint set as the Newton scheme uses it."""
+    if not os.environ.get(sparse.ENVIRONMENT_VARIABLE):
+        # the fastest factorisation for the size (docs/solver_backends.md); the secant
+        # scheme keeps the old call, which reproduces its earlier results bit for bit
+        constraints.sparse_backend = "auto"
+    if hasattr(constraints, "stabilization"):
+        # Newton solves the contact conditions with the displacements: no pair is frozen,
+        # and no spring stands in the matrix that is not in the residual (it would make the
+        # tangent inexact: CF-4's elastic step then converged linearly, 1 % per iteration);
+        # a pair that keeps switching between held and open is decided semismoothly instead
+        constraints.stabilization = 0.0
+        constraints.settle_cycles = True
+        constraints.max_changes = np.iinfo(np.int64).max
 
 
 def take_checkpoint(path: PathState, constraints, energy: EnergyAccount

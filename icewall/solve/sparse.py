@@ -106,11 +106,16 @@ def choose_for(n_rows: int) -> Choice:
     return Choice("superlu", "COLAMD" if n_rows < AUTO_ORDERING_ROWS else "MMD_ATA")
 
 
+def _requested(requested: str | None) -> str:
+    """The backend asked for: `requested`, else $ICEWALL_SPARSE_SOLVER, else superlu."""
+    return (requested or os.environ.get(ENVIRONMENT_VARIABLE) or "superlu").strip().lower()
+
+
 def choose_backend(requested: str | None = None, n_rows: int | None = None) -> str:
     """`requested`, else $ICEWALL_SPARSE_SOLVER, else superlu; auto = choose_for(n_rows), or
     without a size the first installed of umfpack, pardiso, superlu. An absent optional
     backend falls back to superlu."""
-    name = (requested or os.environ.get(ENVIRONMENT_VARIABLE) or "superlu").strip().lower()
+    name = _requested(requested)
     if name == "auto":
         if n_rows is not None:
             return choose_for(n_rows).backend
@@ -272,7 +277,7 @@ def factorize(A: sp.spmatrix, backend: str | None = None,
     Raises SingularMatrixError.
     """
     A = sp.csc_matrix(A)
-    name = (backend or os.environ.get(ENVIRONMENT_VARIABLE) or "superlu").strip().lower()
+    name = _requested(backend)
     choice = choose_for(A.shape[0]) if name == "auto" else Choice(choose_backend(name))
     if choice.backend == "umfpack":
         return UmfpackFactor(A)
