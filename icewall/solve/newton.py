@@ -19,9 +19,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from icewall.errors import ConvergenceError
 from icewall.solve.control import Increment, PathState, Problem, StepFailed, _external_force_norm
 from icewall.solve.controls import LoadControl
 from icewall.solve.settings import SolverSettings
+from icewall.solve.transient import PseudoTransient
 
 log = logging.getLogger(__name__)
 
@@ -83,14 +85,17 @@ PREDICTOR_PROBE = 1e-6
 
 def newton_increment(problem: Problem, settings: SolverSettings, start: PathState,
                      control, preload_factor: float, kind: str = "control",
-                     last_increment: np.ndarray | None = None) -> Increment:
+                     last_increment: np.ndarray | None = None,
+                     transient: PseudoTransient | None = None) -> Increment:
     """Iterate one increment to convergence by Newton-Raphson under `control`
     (icewall.solve.controls: load, displacement or dissipation control; the preload at
     `preload_factor`). Raises StepFailed when it does not converge in
     `settings.max_iterations`. `last_increment`: the displacements of the last converged
     increment; the predictor's tangent is taken a PREDICTOR_PROBE of it ahead of the committed
     state, so that a point that was loading on its envelope predicts with its loading branch
-    (at the committed state itself every point unloads: its secant)."""
+    (at the committed state itself every point unloads: its secant). `transient`: iterate
+    with the pseudo-time shift of a drop step (icewall.solve.transient: full steps, no line
+    search, up to its own iteration count), converged on the same tolerances."""
     c = problem.constraints
     R = c.restrict(problem.reference_load)
     F_pre = (np.zeros_like(start.u) if problem.preload is None
@@ -103,7 +108,9 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
     disp_norm, flips = math.inf, 0
     previous_moduli = None
     forensics["chords"] = []
-    for iteration in range(1, settings.max_iterations + 1):
+    limit = settings.max_iterations if transient is None else transient.max_iterations
+    previous_norm = current.load_norm
+    for iteration in range(1, limit + 1):
         log.debug("newton %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
                   "gap flips %d, Gauss-point flag changes %s, step length %s", iteration,
                   disp_norm, current.load_norm, current.load_factor, flips,
@@ -125,9 +132,17 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         elif previous_moduli is not None:
             matrix_at = _chords_at_kinks(problem, start, current, previous_moduli, forensics)
         previous_moduli = current.evaluation.moduli
-        du, dP, dm = _newton_direction(problem, current, control, matrix_at)
-        eta, trial = _line_search(problem, start, current, du, dP, dm, F_pre, R,
-                                  LINE_SEARCH_RISE if flips else 1.0)
+        if transient is None:
+            du, dP, dm = _newton_direction(problem, current, control, matrix_at)
+            eta, trial = _line_search(problem, start, current, du, dP, dm, F_pre, R,
+                                      LINE_SEARCH_RISE if flips else 1.0)
+        else:
+            if iteration > 2:  # the first correction only meets the control's target
+                transient.after_iteration(previous_norm, current.load_norm)
+            du, dP, dm = _shifted_direction(problem, current, control, matrix_at, transient)
+            eta, trial = 1.0, _evaluate(problem, start, current.u + du, current.load_factor + dP,
+                                        F_pre, R, _trial_gap_force(problem, dm, 1.0))
+        previous_norm = current.load_norm
         forensics["line_search"].append(round(math.log2(1.0 / eta)))
         flips = c.apply(eta * dm, trial.u)
         forensics["gap_flips"].append(int(flips))
@@ -138,7 +153,7 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         trial.unbalance = trial.structural - c.restrict(c.constraint_force())
         disp_norm = eta * _norm(du) / max(_norm(trial.u), 1e-30)  # eq. 4.4
         current = trial
-    raise StepFailed(f"no convergence in {settings.max_iterations} Newton iterations "
+    raise StepFailed(f"no convergence in {limit} Newton iterations "
                      f"(displacement norm {disp_norm:.3g}, load norm {current.load_norm:.3g})",
                      "non-convergence")
 
@@ -182,12 +197,26 @@ def _count_changes(before, after) -> int:
                    for a, b in zip(before, after, strict=True) if a is not None))
 
 
-def _newton_direction(problem: Problem, current: Iterate, control, matrix_at
-                      ) -> tuple[np.ndarray, float, np.ndarray]:
-    """(du, dP, dlam) of a full Newton step: one factorisation of the augmented tangent, two
-    solves (reference load and unbalance), the load factor from the control's row."""
+def _shifted_direction(problem: Problem, current: Iterate, control, matrix_at,
+                       transient: PseudoTransient) -> tuple[np.ndarray, float, np.ndarray]:
+    """The direction of a drop step: K_t + D / dt, with 1/dt grown while the matrix is
+    singular."""
+    while True:
+        try:
+            return _newton_direction(problem, current, control, matrix_at, transient.shift())
+        except ConvergenceError as exc:
+            if exc.reason != "singular system" or not transient.after_singular():
+                raise StepFailed(str(exc), exc.reason) from None
+
+
+def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
+                      shift=None) -> tuple[np.ndarray, float, np.ndarray]:
+    """(du, dP, dlam) of a full Newton step: one factorisation of the augmented tangent (plus
+    `shift`, a drop step's D / dt), two solves (reference load and unbalance), the load
+    factor from the control's row."""
     s, c = problem.structure, problem.constraints
-    factor = c.factorize(s.stiffness(matrix_at))
+    K = s.stiffness(matrix_at)
+    factor = c.factorize(K if shift is None else K + shift)
     rhs_unbalance = c.unbalance_rhs(current.structural, current.u)
     if isinstance(control, LoadControl):
         du, dm = c.split(factor.solve(rhs_unbalance))

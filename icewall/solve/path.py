@@ -7,7 +7,11 @@ converges; where it cannot at the smallest step (a snap-back of the control defl
 releases more energy than the rest of the wall can take up at a fixed deflection), the steps are
 taken under a control that grows through the snap-back - the opening of the concrete points
 at or near cracking (`controls.OpeningControl`; the energy released, `DissipationControl`,
-for other laws) - until the load and the deflection rise together again. The step size
+for other laws) - until the load and the deflection rise together again. Where that fails
+too at its smallest step (or the tangent is singular), the load drops at a fixed deflection,
+as it does in a stroke-controlled test: one step to the next deflection iterated with a
+pseudo-time shift of the matrix (`transient.PseudoTransient`) and accepted on the same
+tolerances (`analysis.on_snap_back: stop` stops the run there instead). The step size
 (deflection or opening) follows the iteration count (`steps.StepSizeController`).
 """
 
@@ -36,9 +40,10 @@ from icewall.solve.controls import (
     OpeningControl,
     largest_principal,
 )
-from icewall.solve.newton import newton_increment
+from icewall.solve.newton import PREDICTOR_PROBE, newton_increment
 from icewall.solve.settings import SolverSettings
 from icewall.solve.steps import StepSizeController
+from icewall.solve.transient import PseudoTransient
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +82,15 @@ class _Path:
         """1/2 f.u of the current state (N mm): the scale of the released energies."""
         f = self.state.load_factor * self.R + self.F_pre
         return 0.5 * abs(float(f @ self.state.u))
+
+    def drop(self, last_increment: np.ndarray | None) -> PseudoTransient:
+        """The pseudo-time of a drop step from the current state: D from the tangent a
+        PREDICTOR_PROBE along the last increment ahead (at the committed state itself the
+        law's tangent is its unloading one)."""
+        s, u = self.problem.structure, self.state.u
+        ahead = u if last_increment is None else u + PREDICTOR_PROBE * last_increment
+        evaluation = s.evaluate(ahead, self.state.states, tangent=True)
+        return PseudoTransient.from_tangent(s.stiffness(evaluation).diagonal())
 
     def snap_back_control(self, fraction: float):
         """The control through a snap-back: the opening of the concrete points at or near
@@ -164,29 +178,47 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             goal = min(current + size, settings.target)
             control = DisplacementControl(problem.control_equation, goal)
             where = f"control {goal:.4g}"
+        elif mode == "drop":
+            goal = min(current + steps.smallest, settings.target)
+            control = DisplacementControl(problem.control_equation, goal)
+            where = f"control {goal:.4g} (drop at a fixed deflection)"
         else:
             control = path.snap_back_control(release)
             where = f"control {current:.4g} (snap-back control, step {release:.3g})"
         tic = time.perf_counter()
         try:
             inc = newton_increment(problem, settings, state, control, preload,
-                                   last_increment=last_increment)
+                                   last_increment=last_increment,
+                                   transient=path.drop(last_increment) if mode == "drop"
+                                   else None)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
             reason = getattr(exc, "reason", "non-convergence")
             log.info("%s: %s", where, exc)
-            if mode == "displacement" and reason != "singular system" and (
-                    size <= steps.smallest * (1 + 1e-9)):
+            if mode == "displacement" and size <= steps.smallest * (1 + 1e-9):
+                if reason == "singular system":  # no control helps a singular tangent
+                    mode = "drop"
+                    log.info("%s: a drop at a fixed deflection", where)
+                    continue
                 # no equilibrium at the next deflection: a snap-back, followed by its control
                 mode, release = "opening", FIRST_OPENING
                 log.info("%s: switching to opening control", where)
                 continue
+            if mode == "drop":
+                raise ConvergenceError(f"{exc} at {where}: neither displacement control, "
+                                       "nor the opening control at its smallest step, nor a "
+                                       "drop at a fixed deflection converged",
+                                       reason=reason) from None
             if mode == "opening":
                 release *= 0.5
                 if release < SMALLEST_OPENING:
-                    raise ConvergenceError(f"{exc} at {where}, also under opening control at "
-                                           "the smallest opening step",
-                                           reason=reason) from None
+                    if settings.on_snap_back == "stop":
+                        raise ConvergenceError(
+                            f"{exc} at {where}, also under opening control at the smallest "
+                            "opening step (analysis.on_snap_back: stop; 'continue' takes the "
+                            "drop at a fixed deflection)", reason=reason) from None
+                    mode = "drop"  # what a stroke-controlled test does: the load drops
+                    log.info("%s: a drop at a fixed deflection", where)
                 continue
             size = steps.after_failure(size, where, reason, str(exc))
             continue
@@ -197,7 +229,9 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         still = abs(d_deflection) <= STILL * max(settings.increment, 1e-30) and abs(
             d_load) <= STILL * max(abs(state.load_factor), 1e-30)
         stagnant = stagnant + 1 if still else 0
-        if mode == "opening":
+        if mode == "drop":
+            inc.snap_back, mode = True, "displacement"
+        elif mode == "opening":
             inc.snap_back = d_deflection < 0.0
             growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
             release *= min(2.0, max(0.5, growth))

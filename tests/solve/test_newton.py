@@ -193,3 +193,46 @@ def test_a_path_that_no_longer_moves_stops_with_a_reason(monkeypatch):
     with pytest.raises(ConvergenceError, match="no longer moves") as info:
         list(follow_path(problem, newton_settings(0.5, 0.05), initial))
     assert info.value.reason == "stagnation"
+
+
+def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections():
+    # The snap-back bar of the test above with analysis.on_snap_back: continue. Once the
+    # traced snap-back has separated the bar, no control converges (the tangent is singular:
+    # the weak element has lost all stiffness); a stroke-controlled test then records zero
+    # load at every larger stroke, and the weak element takes the whole stretch. Each step
+    # to the next deflection is a drop step (transient.PseudoTransient) accepted on the same
+    # tolerances: the closed form is P = 0, eps_xx = d / h in the weak element, 0 elsewhere.
+    length, h, f, eps_f, area = 1000.0, 100.0, 0.9 * 3.0, 0.0003, 10.0
+    problem, initial = newton_bar(length, 10, failure_strain=eps_f)
+    chosen = replace(newton_settings(0.2, 0.02, cuts=3), on_snap_back="continue")
+    steps = list(follow_path(problem, chosen, initial))
+    d = np.array([inc.control_displacement for inc, _ in steps])
+    P = np.array([inc.load_factor for inc, _ in steps])
+    assert d[-1] == pytest.approx(0.2)
+    peak = int(np.argmax(P))
+    assert P[peak] == pytest.approx(f * area, rel=1e-9)
+    beyond = np.flatnonzero(d > d[peak] * (1 + 1e-9))
+    beyond = beyond[beyond > peak]
+    assert beyond.size >= 3 and all(steps[i][0].snap_back for i in beyond)
+    assert np.all(np.abs(P[beyond]) <= 1e-6 * P[peak])
+    strain = steps[-1][0].evaluation.strain[:, :, 0]  # (elements, points)
+    assert np.allclose(strain[0], 0.2 / h, rtol=1e-6)  # the weak element at the loaded end
+    assert np.all(np.abs(strain[1:]) <= 1e-6 * 0.2 / h)
+
+
+def test_pseudo_time_grows_after_a_rise_and_shrinks_after_a_fall():
+    from icewall.solve.transient import LARGEST_INVERSE_STEP, PseudoTransient
+
+    t = PseudoTransient.from_tangent(np.array([4.0, 0.0, -2.0, 1e6]))
+    assert np.all(t.diagonal > 0.0)  # floored where the tangent lost its stiffness
+    assert t.shift().diagonal() == pytest.approx(t.inverse_step * t.diagonal)
+    first = t.inverse_step
+    t.after_iteration(1.0, 0.5)
+    assert t.inverse_step == pytest.approx(0.5 * first)
+    t.after_iteration(0.5, 0.6)
+    assert t.inverse_step == pytest.approx(2.0 * first)
+    while t.after_singular():
+        pass
+    assert t.inverse_step == LARGEST_INVERSE_STEP and not t.after_singular()
+    t.after_iteration(1.0, 2.0)
+    assert t.inverse_step == LARGEST_INVERSE_STEP
