@@ -197,6 +197,11 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             log.info("%s: %s", where, exc)
             if mode == "displacement" and size <= steps.smallest * (1 + 1e-9):
                 if reason == "singular system":  # no control helps a singular tangent
+                    if settings.on_snap_back == "stop":
+                        raise ConvergenceError(f"{exc} at {where} with the smallest step "
+                                               f"{steps.smallest:.3g} (analysis.on_snap_back: "
+                                               "stop; 'continue' takes the drop at a fixed "
+                                               "deflection)", reason=reason) from None
                     mode = "drop"
                     log.info("%s: a drop at a fixed deflection", where)
                     continue

@@ -236,3 +236,14 @@ def test_pseudo_time_grows_after_a_rise_and_shrinks_after_a_fall():
     assert t.inverse_step == LARGEST_INVERSE_STEP and not t.after_singular()
     t.after_iteration(1.0, 2.0)
     assert t.inverse_step == LARGEST_INVERSE_STEP
+
+
+def test_on_snap_back_stop_stops_where_the_drop_would_be_taken():
+    # the same bar with analysis.on_snap_back: stop: the run ends after the traced snap-back,
+    # where the drops of the test above begin, with the option named in the message
+    problem, initial = newton_bar(1000.0, 10, failure_strain=0.0003)
+    steps = []
+    with pytest.raises(ConvergenceError, match="on_snap_back: stop"):
+        for inc, _ in follow_path(problem, newton_settings(0.2, 0.02, cuts=3), initial):
+            steps.append(inc)
+    assert steps and max(inc.control_displacement for inc in steps) < 0.1
