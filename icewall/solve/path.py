@@ -21,7 +21,7 @@ import logging
 import math
 import time
 from collections.abc import Iterator
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -159,73 +159,109 @@ def _next_state(problem: Problem, state: PathState, inc: Increment, resume: tupl
                      inc.preload_factor, scale, resume)
 
 
+@dataclass
+class _Mode:
+    """The control of the next step and its size: "displacement" (deflection step `size`),
+    "opening" (the snap-back control, `release`) or "drop" (at a fixed deflection)."""
+
+    name: str
+    size: float
+    release: float
+
+    def control(self, problem: Problem, path: _Path, current: float,
+                steps: StepSizeController, settings: SolverSettings) -> tuple[object, str]:
+        """The control of the next step and where it stands (for messages)."""
+        if self.name == "opening":
+            return (path.snap_back_control(self.release),
+                    f"control {current:.4g} (snap-back control, step {self.release:.3g})")
+        step = self.size if self.name == "displacement" else steps.smallest
+        goal = min(current + step, settings.target)
+        where = f"control {goal:.4g}" + (" (drop at a fixed deflection)"
+                                         if self.name == "drop" else "")
+        return DisplacementControl(problem.control_equation, goal), where
+
+    def after_failure(self, exc: Exception, where: str, steps: StepSizeController,
+                      settings: SolverSettings) -> None:
+        """Cut the step, or switch to the next control; ConvergenceError when none is left."""
+        reason = getattr(exc, "reason", "non-convergence")
+        stop = settings.on_snap_back == "stop"
+        if self.name == "drop":
+            raise ConvergenceError(f"{exc} at {where}: neither displacement control, nor the "
+                                   "opening control at its smallest step, nor a drop at a "
+                                   "fixed deflection converged", reason=reason) from None
+        if self.name == "opening":
+            self.release *= 0.5
+            if self.release < SMALLEST_OPENING:
+                if stop:
+                    raise ConvergenceError(
+                        f"{exc} at {where}, also under opening control at the smallest "
+                        "opening step (analysis.on_snap_back: stop; 'continue' takes the "
+                        "drop at a fixed deflection)", reason=reason) from None
+                self._switch("drop", where)  # what a stroke-controlled test does
+            return
+        if self.size > steps.smallest * (1 + 1e-9):
+            self.size = steps.after_failure(self.size, where, reason, str(exc))
+        elif reason != "singular system":
+            # no equilibrium at the next deflection: a snap-back, followed by its control
+            self.release = FIRST_OPENING
+            self._switch("opening", where)
+        elif stop:  # no control helps a singular tangent: only the drop would
+            raise ConvergenceError(f"{exc} at {where} with the smallest step "
+                                   f"{steps.smallest:.3g} (analysis.on_snap_back: stop; "
+                                   "'continue' takes the drop at a fixed deflection)",
+                                   reason=reason) from None
+        else:
+            self._switch("drop", where)
+
+    def after_success(self, inc: Increment, d_deflection: float, d_load: float,
+                      steps: StepSizeController, settings: SolverSettings) -> None:
+        """Size the next step, and leave a snap-back control once load and deflection rise
+        together again."""
+        if self.name == "drop":
+            inc.snap_back, self.name = True, "displacement"
+        elif self.name == "opening":
+            inc.snap_back = d_deflection < 0.0
+            growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
+            self.release *= min(2.0, max(0.5, growth))
+            # a step met within the tolerance at once moved too little to tell the way
+            if d_deflection > 0.0 and d_load > 0.0 and inc.iterations > 1:
+                self.name = "displacement"
+                self.size = max(steps.smallest, min(steps.largest, d_deflection))
+        else:
+            self.size = steps.after_success(self.size, inc.iterations)
+
+    def _switch(self, name: str, where: str) -> None:
+        self.name = name
+        log.info("%s: %s", where, {"opening": "switching to opening control",
+                                   "drop": "a drop at a fixed deflection"}[name])
+
+
 def _advance_control(problem: Problem, settings: SolverSettings, state: PathState,
                      preload: float, resume: tuple) -> Iterator[tuple[Increment, PathState]]:
-    """Displacement control to the target, the snap-back control through snap-backs."""
+    """Displacement control to the target, the snap-back control through snap-backs, a drop
+    at a fixed deflection where neither converges."""
     c = problem.constraints
     steps = _controller(settings, settings.increment)
-    size, mode, release, stagnant = steps.largest, "displacement", 0.0, 0
+    mode, stagnant = _Mode("displacement", steps.largest, 0.0), 0
     if resume:  # (size, release, 1.0 under the snap-back control, stagnant steps): below
-        size, release = resume[0], resume[1]
-        mode = "opening" if resume[2] else "displacement"
+        mode = _Mode("opening" if resume[2] else "displacement", resume[0], resume[1])
         stagnant = int(resume[3])
     path = _Path(problem, state, preload)
     last_increment = state.last_increment
     while -float(state.u[problem.control_equation]) < settings.target - 1e-12 * max(
             1.0, settings.target):
         current = -float(state.u[problem.control_equation])
-        if mode == "displacement":
-            goal = min(current + size, settings.target)
-            control = DisplacementControl(problem.control_equation, goal)
-            where = f"control {goal:.4g}"
-        elif mode == "drop":
-            goal = min(current + steps.smallest, settings.target)
-            control = DisplacementControl(problem.control_equation, goal)
-            where = f"control {goal:.4g} (drop at a fixed deflection)"
-        else:
-            control = path.snap_back_control(release)
-            where = f"control {current:.4g} (snap-back control, step {release:.3g})"
+        control, where = mode.control(problem, path, current, steps, settings)
         tic = time.perf_counter()
         try:
             inc = newton_increment(problem, settings, state, control, preload,
                                    last_increment=last_increment,
-                                   transient=path.drop(last_increment) if mode == "drop"
+                                   transient=path.drop(last_increment) if mode.name == "drop"
                                    else None)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
-            reason = getattr(exc, "reason", "non-convergence")
             log.info("%s: %s", where, exc)
-            if mode == "displacement" and size <= steps.smallest * (1 + 1e-9):
-                if reason == "singular system":  # no control helps a singular tangent
-                    if settings.on_snap_back == "stop":
-                        raise ConvergenceError(f"{exc} at {where} with the smallest step "
-                                               f"{steps.smallest:.3g} (analysis.on_snap_back: "
-                                               "stop; 'continue' takes the drop at a fixed "
-                                               "deflection)", reason=reason) from None
-                    mode = "drop"
-                    log.info("%s: a drop at a fixed deflection", where)
-                    continue
-                # no equilibrium at the next deflection: a snap-back, followed by its control
-                mode, release = "opening", FIRST_OPENING
-                log.info("%s: switching to opening control", where)
-                continue
-            if mode == "drop":
-                raise ConvergenceError(f"{exc} at {where}: neither displacement control, "
-                                       "nor the opening control at its smallest step, nor a "
-                                       "drop at a fixed deflection converged",
-                                       reason=reason) from None
-            if mode == "opening":
-                release *= 0.5
-                if release < SMALLEST_OPENING:
-                    if settings.on_snap_back == "stop":
-                        raise ConvergenceError(
-                            f"{exc} at {where}, also under opening control at the smallest "
-                            "opening step (analysis.on_snap_back: stop; 'continue' takes the "
-                            "drop at a fixed deflection)", reason=reason) from None
-                    mode = "drop"  # what a stroke-controlled test does: the load drops
-                    log.info("%s: a drop at a fixed deflection", where)
-                continue
-            size = steps.after_failure(size, where, reason, str(exc))
+            mode.after_failure(exc, where, steps, settings)
             continue
         c.commit()
         inc.wall_time = time.perf_counter() - tic
@@ -234,21 +270,11 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         still = abs(d_deflection) <= STILL * max(settings.increment, 1e-30) and abs(
             d_load) <= STILL * max(abs(state.load_factor), 1e-30)
         stagnant = stagnant + 1 if still else 0
-        if mode == "drop":
-            inc.snap_back, mode = True, "displacement"
-        elif mode == "opening":
-            inc.snap_back = d_deflection < 0.0
-            growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
-            release *= min(2.0, max(0.5, growth))
-            # a step met within the tolerance at once moved too little to tell the way
-            if d_deflection > 0.0 and d_load > 0.0 and inc.iterations > 1:
-                mode, size = "displacement", max(steps.smallest, min(steps.largest,
-                                                                     d_deflection))
-        else:
-            size = steps.after_success(size, inc.iterations)
+        mode.after_success(inc, d_deflection, d_load, steps, settings)
         last_increment = inc.u - state.u
-        state = _next_state(problem, state, inc, ("control", size, release,
-                                                  float(mode == "opening"), float(stagnant)))
+        state = _next_state(problem, state, inc, ("control", mode.size, mode.release,
+                                                  float(mode.name == "opening"),
+                                                  float(stagnant)))
         state.last_increment = last_increment
         path.state = state
         yield inc, state
