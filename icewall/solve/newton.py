@@ -203,20 +203,21 @@ def _shifted_direction(problem: Problem, current: Iterate, control, matrix_at,
     singular."""
     while True:
         try:
-            return _newton_direction(problem, current, control, matrix_at, transient.shift())
+            return _newton_direction(problem, current, control, matrix_at, transient)
         except ConvergenceError as exc:
             if exc.reason != "singular system" or not transient.after_singular():
                 raise StepFailed(str(exc), exc.reason) from None
 
 
 def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
-                      shift=None) -> tuple[np.ndarray, float, np.ndarray]:
+                      transient: PseudoTransient | None = None
+                      ) -> tuple[np.ndarray, float, np.ndarray]:
     """(du, dP, dlam) of a full Newton step: one factorisation of the augmented tangent (plus
-    `shift`, a drop step's D / dt), two solves (reference load and unbalance), the load
-    factor from the control's row."""
+    a drop step's D / dt), two solves (reference load and unbalance), the load factor from
+    the control's row."""
     s, c = problem.structure, problem.constraints
     K = s.stiffness(matrix_at)
-    factor = c.factorize(K if shift is None else K + shift)
+    factor = c.factorize(K if transient is None else K + transient.shift(K))
     rhs_unbalance = c.unbalance_rhs(current.structural, current.u)
     if isinstance(control, LoadControl):
         du, dm = c.split(factor.solve(rhs_unbalance))

@@ -40,7 +40,7 @@ from icewall.solve.controls import (
     OpeningControl,
     largest_principal,
 )
-from icewall.solve.newton import PREDICTOR_PROBE, newton_increment
+from icewall.solve.newton import newton_increment
 from icewall.solve.settings import SolverSettings
 from icewall.solve.steps import StepSizeController
 from icewall.solve.transient import PseudoTransient
@@ -82,15 +82,6 @@ class _Path:
         """1/2 f.u of the current state (N mm): the scale of the released energies."""
         f = self.state.load_factor * self.R + self.F_pre
         return 0.5 * abs(float(f @ self.state.u))
-
-    def drop(self, last_increment: np.ndarray | None) -> PseudoTransient:
-        """The pseudo-time of a drop step from the current state: D from the tangent a
-        PREDICTOR_PROBE along the last increment ahead (at the committed state itself the
-        law's tangent is its unloading one)."""
-        s, u = self.problem.structure, self.state.u
-        ahead = u if last_increment is None else u + PREDICTOR_PROBE * last_increment
-        evaluation = s.evaluate(ahead, self.state.states, tangent=True)
-        return PseudoTransient.from_tangent(s.stiffness(evaluation).diagonal())
 
     def snap_back_control(self, fraction: float):
         """The control through a snap-back: the opening of the concrete points at or near
@@ -256,7 +247,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         try:
             inc = newton_increment(problem, settings, state, control, preload,
                                    last_increment=last_increment,
-                                   transient=path.drop(last_increment) if mode.name == "drop"
+                                   transient=PseudoTransient() if mode.name == "drop"
                                    else None)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()

@@ -5,7 +5,7 @@ Where neither displacement control nor the opening control converges (after the 
 the concrete under the load crushes, the tangent is singular or indefinite at the step's
 start and Newton diverges at any step size), the step to the next deflection is iterated with
 the matrix K_t + D / dt (Kelley & Keyes 1998; Coffey, Kelley & Keyes 2003): D the diagonal of
-the tangent at the step's start, floored, so that 1/dt > 0 keeps the matrix regular and
+the step's first matrix (the predictor's tangent), floored, so that 1/dt > 0 keeps the matrix regular and
 the iterates go down the energy like a damped dynamic relaxation towards a stable
 equilibrium at the fixed deflection; 1/dt halves after every iteration that lowers the
 unbalance and grows 4x after one that raises it, so the last iterations are Newton's. Only
@@ -35,9 +35,10 @@ ITERATIONS = 1500
 
 @dataclass
 class PseudoTransient:
-    """The pseudo-time of one drop step: D and the current 1/dt."""
+    """The pseudo-time of one drop step: D (taken from the first matrix it shifts, unless
+    given) and the current 1/dt."""
 
-    diagonal: np.ndarray
+    diagonal: np.ndarray | None = None
     inverse_step: float = FIRST_INVERSE_STEP
     max_iterations: int = ITERATIONS
 
@@ -46,8 +47,10 @@ class PseudoTransient:
         d = np.abs(np.asarray(tangent_diagonal, dtype=float))
         return cls(np.maximum(d, DIAGONAL_FLOOR * float(np.median(d[d > 0.0]))))
 
-    def shift(self) -> sp.dia_matrix:
-        """D / dt, to be added to the tangent."""
+    def shift(self, tangent: sp.spmatrix | None = None) -> sp.dia_matrix:
+        """D / dt, to be added to the tangent; D is the first tangent's floored diagonal."""
+        if self.diagonal is None:
+            self.diagonal = self.from_tangent(tangent.diagonal()).diagonal
         return sp.diags(self.inverse_step * self.diagonal)
 
     def after_iteration(self, before: float, after: float) -> None:
