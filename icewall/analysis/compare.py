@@ -129,7 +129,7 @@ def _value_row(run: str, quantity: str, base, now, tol: float, band=None,
                    f"{GATE_FRACTION:g} x {tol:.1%}")
     if abs(change) > tol:
         return Row(run, quantity, base, now, change, "FAIL",
-                   f"moved more than {tol:.0%}" + (f" outside its {where}" if where else ""))
+                   f"moved more than {100 * tol:g}%" + (f" outside its {where}" if where else ""))
     return Row(run, quantity, base, now, change, "ok", f"in {where}" if where else "")
 
 

@@ -98,7 +98,9 @@ def build_layout(deck: Deck) -> Layout:
     leg_spans = [(a, b) for a, b, _ in legs]
     leg_height = {(a, b): geo.legs[i].height for a, b, i in legs}
     p = deck.loads.patches
-    patch_spans = _spans(p.positions, [0.5 * p.width] * len(p.positions), model)
+    # clipped to the wall: a patch flush with its end, widened by a round-off realization
+    patch_spans = [(max(a, -half), min(b, half))
+                   for a, b in _spans(p.positions, [0.5 * p.width] * len(p.positions), model)]
 
     xs = [x_lo, half]
     for a, b in d_spans + d_spans_end + bp_spans + leg_spans + patch_spans:

@@ -5,8 +5,8 @@ Where neither displacement control nor the opening control converges (after the 
 the concrete under the load crushes, the tangent is singular or indefinite at the step's
 start and Newton diverges at any step size), the step to the next deflection is iterated with
 the matrix K_t + D / dt (Kelley & Keyes 1998; Coffey, Kelley & Keyes 2003): D the diagonal of
-the step's first matrix (the predictor's tangent), floored, so that 1/dt > 0 keeps the matrix regular and
-the iterates go down the energy like a damped dynamic relaxation towards a stable
+the step's first matrix (the predictor's tangent), floored, so that 1/dt > 0 keeps the matrix
+regular and the iterates go down the energy like a damped dynamic relaxation towards a stable
 equilibrium at the fixed deflection; 1/dt halves after every iteration that lowers the
 unbalance and grows 4x after one that raises it, so the last iterations are Newton's. Only
 the matrix carries the pseudo-time: the residual is the law's, and the step is accepted on
