@@ -24,23 +24,27 @@ from icewall.errors import IcewallError, ResultError
 # Haswell, Sandybridge, Prescott and SkylakeX, the NumPy and numba concrete kernels, one BLAS
 # thread); a figure is gated at its tolerance beyond its band where the band spans at most
 # GATE_FRACTION of it, else reported (compare._value_row). Gated pre-peak loads agree across
-# all of those to 0.3 %; a 3 % change of f'c, of the friction coefficient or of the TF leg
-# width moves some of them by more than 1 % beyond their bands (tests/compare/
-# model_changes.yaml). The secant iteration's post-peak path moves by up to 2x with the
+# all of those to 0.25 % (TF and VTT3 to 0.07 %); a 3 % change of f'c, of the friction
+# coefficient or of the TF leg width moves some of them by more than 0.5 % beyond their bands
+# (tests/compare/model_changes.yaml): with the readings of issue 20 a 1 % tolerance no longer
+# caught the f'c change (its largest gated move was 0.99 %), hence 0.5 %. The secant
+# iteration's post-peak path moves by up to 2x with the
 # platform, so the residual is reported, never gated, until the solver converges it. The band
-# of the mean test/predicted ratio: the variants' mean is 0.91 today, under the acceptance band
-# (VTT3 and TF-4 are over-predicted by 35 and 30 %, CF-8 under-predicted by 22 %;
-# docs/validation.md); the floor sits under that, so that a change which makes the agreement
-# with the tests worse fails even after --update has reset the per-run values; the ceiling
-# leaves room for the fix. The acceptance band (baseline.RATIO_BAND) is for `make validate`.
-CI_TOLERANCES = {"peak_tol": 0.03, "curve_tol": 0.01, "residual_tol": None,
-                 "band": (0.80, 1.10)}
+# of the mean test/predicted ratio: the variants' mean is 0.82 with the readings of issue 20
+# (every wall over-predicted, CF-8 by 4 % and CF-5 by 50 %; docs/validation.md), under the
+# acceptance band; the floor sits under that by more than the platforms move it (the variants'
+# peaks spread by up to 16 % over their ten runs), so that a change which makes the agreement
+# with the tests clearly worse fails even after --update has reset the per-run values; the
+# ceiling leaves room for the fix. The acceptance band (baseline.RATIO_BAND) is for
+# `make validate`.
+CI_TOLERANCES = {"peak_tol": 0.03, "curve_tol": 0.005, "residual_tol": None,
+                 "band": (0.75, 1.10)}
 BASELINE_CI = Path(__file__).resolve().parents[2] / "tests" / "compare" / "baseline_ci.yaml"
 # CI variants of the eight analysed decks: the shipped deck (50 mm elements, 1 mm increments)
-# ended a little past its peak (the CF walls peak at 7-13 mm, TF at 3-5, VTT3 at 6) and with
-# no field output (history only): the figures CI checks are those of `make validate`, not of a
-# coarser model, at about the cost of the former coarse variants (2 mm steps on 75 mm
-# elements to 16 mm, where three CF walls had not yet peaked and TF peaks were 25 % higher).
+# ended a little past its peak on the secant iteration (the CF walls peak at 7-14.5 mm, TF at
+# 5-7.5; VTT3 is on its plateau at 10 mm, within 1 % of its peak at 11-31 mm) and with no field
+# output (history only): the figures CI checks are those of `make validate`, not of a coarser
+# model, at about the cost of the former coarse variants.
 CI_VARIANTS: dict[str, tuple[str, ...]] = {
     name: (f"loads.control.target={15 if name[0] == 'c' else 8 if name[0] == 't' else 10}",
            "outputs.fields=[]")

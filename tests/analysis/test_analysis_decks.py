@@ -35,15 +35,33 @@ def test_cf_reading():
     for name in ("cf4", "cf5", "cf6", "cf7"):
         g = deck(name).geometry
         assert (g.span, g.overhang, g.diaphragms.positions) == (1500.0, 333.0, (450.0, 750.0))
+        # layout D (decks/README.md §1): midspan, +-L/5 and the wall end, patch flush with it
+        assert deck(name).loads.patches.positions == (0.0, 300.0, 750.0 + 333.0 - 25.0)
     assert deck("cf8").geometry.diaphragms.positions == (450.0, 600.0, 750.0)  # S1/2 cells
-    s = deck("cf8").materials.steel
-    assert (s.formulation, s.fy_reduction) == ("same", 0.0)  # the shared default
     for name in ("cf13", "cf14"):
         d = deck(name)
         assert (d.geometry.span, d.geometry.width) == (1250.0, 375.0)
         assert d.geometry.diaphragms.positions == (325.0, 625.0)
-        assert d.loads.patches.positions == (0.0, 250.0, 500.0, 791.5)
+        assert d.loads.patches.positions == (0.0, 250.0, 625.0 + 333.0 - 25.0)
         assert d.loads.measure.tributary_length == 250.0
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_shared_readings(name):
+    """decks/README.md §3 and the errata: plane-stress plates with E_h = 200 MPa, no f_y
+    reduction, rule (b) read with signed stresses; the same for every deck."""
+    d = deck(name)
+    s = d.materials.steel
+    assert (s.formulation, s.hardening * s.E, s.fy_reduction) == ("plane_stress", 200.0, 0.0)
+    assert d.materials.concrete.compression_tension_rule == "floor"
+
+
+def test_vtt_reading():
+    for name in ("vtt1", "vtt2", "vtt3", "vtt4"):
+        g = deck(name).geometry
+        # V-C (decks/README.md §2): a diaphragm over each support, at L/2 = 455
+        assert g.diaphragms.positions == (100.0, 300.0, 455.0)
+        assert [s.x for s in g.supports] == [455.0]
 
 
 def test_tf_reading():

@@ -251,7 +251,7 @@ def test_a_3_percent_model_change_fails_the_ci_gate(change):
     """Issue 18: the gate must catch a real change of the model. The CI variants were run with
     f'c, the friction coefficient or the TF leg width 3 % larger (tests/compare/
     model_changes.yaml, measured); against the stored baseline each fails on a gated pre-peak
-    load, named with its band."""
+    load, named with its band (0.5 % beyond it, ci_gate.CI_TOLERANCES)."""
     import yaml
 
     data = yaml.safe_load((HERE / "model_changes.yaml").read_text())[change]
@@ -259,9 +259,10 @@ def test_a_3_percent_model_change_fails_the_ci_gate(change):
     runs = {name: base["runs"][name] for name in data["runs"]}
     report = cmp.compare(data["runs"], {**base, "runs": runs},
                          **_ci_tolerances(base), ratio_band=(0.0, 10.0))
-    failed = [r for r in report.failures]
-    assert failed and all(r.quantity.startswith("load@") for r in failed)
-    assert all("outside its band" in r.note or "moved more than 1%" in r.note for r in failed)
+    loads = [r for r in report.failures if r.quantity.startswith("load@")]
+    assert loads and all("moved more than 0.5%" in r.note for r in loads)
+    # anything else that fails is a run that now stops (f'c: CF-13), never a silent pass
+    assert all(r.quantity.startswith("load@") or r.run == "cf13" for r in report.failures)
 
 
 def _ci_tolerances(base: dict) -> dict:
@@ -277,4 +278,6 @@ def test_the_ci_baseline_gates_what_is_reproducible_and_reports_the_rest():
         for band in run["curve_bands"]:
             lo, hi = band
             gated += hi / lo - 1 <= cmp.GATE_FRACTION * base["tolerances"]["curve"]
-    assert gated >= 15  # of 24 pre-peak loads: 17 when written (README, "Round-off")
+    # of 24 pre-peak loads: 14 when written with the readings of issue 20 (17 before; README,
+    # "Round-off")
+    assert gated >= 14

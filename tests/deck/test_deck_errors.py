@@ -26,7 +26,7 @@ CASES = [
      "geometry.diaphragms.positions[1]", "outside the wall", "positions: [450.0, 1080.0]"),
     ("plates thicker than the depth", "  top_plate: 12.6 ", "  top_plate: 240.0 ",
      "geometry.top_plate", "thicker than the depth", "top_plate: 240.0"),
-    ("overlapping patches", "positions: [0.0, 300.0, 600.0, 916.5]",
+    ("overlapping patches", "positions: [0.0, 300.0, 1058.0]",
      "positions: [0.0, 300.0, 320.0, 916.5]", "loads.patches.positions[2]", "overlap",
      "positions: [0.0, 300.0, 320.0"),
     ("support off the wall", "    - x: 750.0", "    - x: 1200.0", "geometry.supports[0].x",
@@ -99,7 +99,7 @@ def test_full_model_without_pin_is_refused(write_deck, cf4_text):
 
 
 def test_half_patch_overlapping_its_mirror(write_deck, cf4_text):
-    path = write_deck(cf4_text.replace("[0.0, 300.0, 600.0, 916.5]", "[10.0, 300.0]", 1))
+    path = write_deck(cf4_text.replace("[0.0, 300.0, 1058.0]", "[10.0, 300.0]", 1))
     with pytest.raises(DeckError, match="mirror"):
         load_deck(path)
 

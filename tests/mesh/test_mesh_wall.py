@@ -106,10 +106,23 @@ def test_cf4_named_sets():
     support = mesh.points[mesh.node_sets["support_1"][0]]
     assert np.allclose(support, [750.0, -25.0])  # centre of the bearing plate's underside
     assert np.allclose(mesh.points[mesh.node_sets["symmetry"], 0], 0.0)
-    # Unit jack load on 3 full patches and the half patch at midspan: total 3.5 N down.
+    # Unit jack load on 2 full patches and the half patch at midspan: total 2.5 N down.
     f = patch_load_vector(deck, mesh).reshape(-1, 2)
     assert f[:, 0].sum() == pytest.approx(0.0, abs=1e-12)
-    assert f[:, 1].sum() == pytest.approx(-3.5)
+    assert f[:, 1].sum() == pytest.approx(-2.5)
+
+
+@pytest.mark.parametrize("k", [0, 1, 4])
+def test_a_patch_flush_with_the_wall_end_survives_the_round_off_widening(k):
+    """CF-4's wall-end station is flush with the end (1058 + 25 = 1083). A round-off
+    realization widens every patch by k 1e-8 of its width (up to 1e-6 mm past the end): the
+    deck stays valid, the mesh gets no line past the end, and the load changes by the
+    widening alone."""
+    width = 50.0 * (1 + k * 1e-8)
+    deck, mesh = _mesh("cf4.yaml", f"loads.patches.width={width!r}")
+    assert mesh.points[:, 0].max() == pytest.approx(deck.geometry.half_length, abs=1e-12)
+    f = patch_load_vector(deck, mesh).reshape(-1, 2)
+    assert f[:, 1].sum() == pytest.approx(-2.5, rel=1e-7)
 
 
 def test_quad4_and_element_size_control_the_mesh():

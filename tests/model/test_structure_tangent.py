@@ -25,7 +25,8 @@ X0 = 100.0  # the block's left edge (axisymmetric: its inner radius)
 
 def _block(formulation: str) -> tuple[Structure, DofMap, np.ndarray]:
     """3 x 2 quad8 block 300 x 100 mm: concrete over a bottom row of steel (CF-4 materials)."""
-    deck = load_deck(DECK, [f"analysis.formulation={formulation}"]).deck
+    deck = load_deck(DECK, [f"analysis.formulation={formulation}",
+                            "materials.steel.formulation=same"]).deck
     mesh = rectangle_mesh(X0, X0 + 300.0, 0.0, 100.0, 3, 2, cell_type="quad8")
     dofs = DofMap(mesh.n_nodes)
     kin = element_kinematics(mesh.points, mesh.cells, "quad8", gauss_rule(3), formulation,

@@ -94,13 +94,14 @@ def test_steel_return_mapping_only_at_yielding_points(monkeypatch, formulation):
 
 
 def test_no_preload_stage_and_no_return_mapping_where_none_is_needed(monkeypatch):
-    """CF-4 to 2 mm: no in-plane load, so no load-control increment; its steel stays elastic,
-    so the von Mises return mapping is never entered (the yield check only)."""
+    """CF-4 to 1 mm: no in-plane load, so no load-control increment; its steel stays elastic,
+    so the von Mises return mapping is never entered (the yield check only). (At 2 mm, on
+    this 150 mm mesh, the top plate under the wall-end station reaches yield in an iteration.)"""
     calls = _count_return_mappings(monkeypatch)
-    model = _model("cf4.yaml")
+    model = _model("cf4.yaml", "loads.control.target=1")
     assert model.preload is None and _model("tf1.yaml").preload is not None
     reports = list(run_nonlinear(model))
-    assert [r.increment.kind for r in reports] == ["control", "control"]  # 2 x 1 mm
+    assert [r.increment.kind for r in reports] == ["control"]  # 1 x 1 mm
     assert reports[-1].counts["yielded"] == 0 and calls == []
 
 

@@ -18,8 +18,12 @@ from icewall.results.reader import open_result
 
 DECKS = Path(__file__).resolve().parents[2] / "decks"
 # Plane stress traces the CF-4 peak within a short range (see the closing notes of issue 4).
+# tolerance 0.02, not the thesis' 0.05: the energy balance below holds to the solver's
+# tolerance (at 0.05 the imbalance of this run reaches 2.6 % of the external work, at 0.02 it
+# stays under 0.7 %)
 OVERRIDES = ["analysis.solver=nonlinear", "analysis.formulation=plane_stress",
-             "loads.control.target=16", "outputs.fields=[displacement, stress, strain, state]"]
+             "loads.control.target=16", "outputs.fields=[displacement, stress, strain, state]",
+             "analysis.tolerance_load=0.02", "analysis.tolerance_displacement=0.02"]
 
 
 @pytest.fixture(scope="module")
