@@ -45,10 +45,20 @@ def solver_settings(deck: Deck) -> SolverSettings:
 
 def scheme_warnings(deck: Deck) -> list[str]:
     """One line each: deck settings under which the chosen scheme is known not to converge."""
-    if (deck.analysis.scheme == "newton" and deck.analysis.solver != "linear"
-            and deck.materials.concrete.compression_tension_rule == "equal"):
-        return ["analysis.scheme newton with materials.concrete.compression_tension_rule "
-                "equal: rule (b) makes the compressive strength jump where a principal stress "
-                "changes sign, and Newton need not converge there (docs/solver.md, item 7); "
-                "floor is the errata's continuous reading"]
-    return []
+    if deck.analysis.scheme != "newton" or deck.analysis.solver == "linear":
+        return []
+    warnings = []
+    if deck.materials.concrete.compression_tension_rule == "equal":
+        warnings.append("analysis.scheme newton with materials.concrete.compression_tension_rule "
+                        "equal: rule (b) makes the compressive strength jump where a principal "
+                        "stress changes sign, and Newton need not converge there "
+                        "(docs/solver.md, item 7); floor is the errata's continuous reading")
+    interface = deck.materials.interface
+    preload = deck.loads.preload
+    if (preload is not None and preload.axial_force > 0.0 and interface.model == "gap"
+            and interface.fixed_points_per_core == 0):
+        warnings.append("analysis.scheme newton with an in-plane tension preload and no fixed "
+                        "points: every interface pair opens, the cores float and the first "
+                        "preload step is singular (docs/solver.md, item 11); the secant scheme "
+                        "runs it")
+    return warnings

@@ -105,6 +105,31 @@ def test_unwritable_output_fails_before_computing(tmp_path, monkeypatch):
     assert called == []  # nothing was meshed or solved
 
 
+def test_check_warns_when_the_newton_scheme_meets_a_tension_preload_without_fixed_points():
+    """TF-5 (+1000 kN on the plates): under Newton every pair opens in the preload and the cores
+    float (docs/solver.md item 11); `icewall check` says so in one line, and nothing of it for
+    the secant scheme, a compression preload (TF-1) or with fixed points."""
+    from pathlib import Path
+
+    decks = Path(__file__).resolve().parents[2] / "decks"
+    runner = CliRunner()
+
+    def lines(deck, *sets):
+        args = ["check", str(decks / deck)]
+        for assignment in sets:
+            args += ["--set", assignment]
+        result = runner.invoke(main, args)
+        assert result.exit_code == 0
+        return [line for line in result.output.splitlines() if "tension preload" in line]
+
+    warned = lines("tf5.yaml", "analysis.scheme=newton")
+    assert len(warned) == 1 and warned[0].startswith("warning: ") and "item 11" in warned[0]
+    assert lines("tf5.yaml") == []
+    assert lines("tf1.yaml", "analysis.scheme=newton") == []
+    assert lines("tf5.yaml", "analysis.scheme=newton",
+                 "materials.interface.fixed_points_per_core=1") == []
+
+
 def test_check_warns_when_the_newton_scheme_meets_the_discontinuous_rule_b():
     """`icewall check` says, in one line, that Newton with rule (b) read `equal` need not
     converge (docs/solver.md item 7); with `floor`, or with the secant scheme, it says
