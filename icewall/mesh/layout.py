@@ -70,9 +70,15 @@ def _unique(values) -> np.ndarray:
     return values[keep]
 
 
+ROUND_OFF = 1e-6
+"""An interval longer than a whole number of elements by less than this fraction of one gets
+that number of elements: a load patch widened by a round-off realization (k 1e-8 of its width)
+keeps the mesh of the run it perturbs (with 1e-9, CF-4's 50 mm patch intervals split in two)."""
+
+
 def _divisions(lines: np.ndarray, size: float) -> np.ndarray:
     lengths = np.diff(lines)
-    return np.maximum(1, np.ceil(lengths / size - 1e-9)).astype(int)
+    return np.maximum(1, np.ceil(lengths / size - ROUND_OFF)).astype(int)
 
 
 def build_layout(deck: Deck) -> Layout:

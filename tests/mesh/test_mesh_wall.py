@@ -125,6 +125,20 @@ def test_a_patch_flush_with_the_wall_end_survives_the_round_off_widening(k):
     assert f[:, 1].sum() == pytest.approx(-2.5, rel=1e-7)
 
 
+@pytest.mark.parametrize("name", ["cf4.yaml", "cf13.yaml", "tf1.yaml", "vtt3.yaml"])
+def test_a_round_off_realization_keeps_the_mesh(name):
+    """Realization k widens the load patches by k 1e-8 of their width (icewall.analysis.sweep):
+    a round-off perturbation, so the mesh keeps its nodes, and they move by no more than the
+    patch edges do (k 25e-8 mm; a 50 mm patch interval used to split into two elements, 794 ->
+    821 nodes on CF-4)."""
+    deck, base = _mesh(name)
+    for k in (1, 2, 4):
+        width = deck.loads.patches.width * (1 + k * 1e-8)
+        _, mesh = _mesh(name, f"loads.patches.width={width!r}")
+        assert mesh.points.shape == base.points.shape
+        assert np.abs(mesh.points - base.points).max() <= k * 25e-8 * (1 + 1e-6)
+
+
 def test_quad4_and_element_size_control_the_mesh():
     _, coarse = _mesh("cf4.yaml", "analysis.element=quad4")
     assert coarse.cells.shape[1] == 4
