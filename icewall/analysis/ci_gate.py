@@ -24,7 +24,7 @@ from icewall.errors import IcewallError, ResultError
 # Haswell, Sandybridge, Prescott and SkylakeX, the NumPy and numba concrete kernels, one BLAS
 # thread); a figure is gated at its tolerance beyond its band where the band spans at most
 # GATE_FRACTION of it, else reported (compare._value_row). Gated pre-peak loads agree across
-# all of those to 0.25 % (TF and VTT3 to 0.07 %); a 3 % change of f'c, of the friction
+# all of those to 0.07 % (23 of 24); a 3 % change of f'c, of the friction
 # coefficient or of the TF leg width moves some of them by more than 0.5 % beyond their bands
 # (tests/compare/model_changes.yaml): with the readings of issue 20 a 1 % tolerance no longer
 # caught the f'c change (its largest gated move was 0.99 %), hence 0.5 %. The secant
