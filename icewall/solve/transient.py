@@ -44,13 +44,12 @@ class PseudoTransient:
 
     @classmethod
     def from_tangent(cls, tangent_diagonal: np.ndarray) -> PseudoTransient:
-        d = np.abs(np.asarray(tangent_diagonal, dtype=float))
-        return cls(np.maximum(d, DIAGONAL_FLOOR * float(np.median(d[d > 0.0]))))
+        return cls(floored_diagonal(tangent_diagonal))
 
     def shift(self, tangent: sp.spmatrix | None = None) -> sp.dia_matrix:
         """D / dt, to be added to the tangent; D is the first tangent's floored diagonal."""
         if self.diagonal is None:
-            self.diagonal = self.from_tangent(tangent.diagonal()).diagonal
+            self.diagonal = floored_diagonal(tangent.diagonal())
         return sp.diags(self.inverse_step * self.diagonal)
 
     def after_iteration(self, before: float, after: float) -> None:
@@ -65,3 +64,9 @@ class PseudoTransient:
         self.inverse_step = min(max(4.0 * self.inverse_step, FIRST_INVERSE_STEP),
                                 LARGEST_INVERSE_STEP)
         return True
+
+
+def floored_diagonal(tangent_diagonal: np.ndarray) -> np.ndarray:
+    """|diag K_t| floored at DIAGONAL_FLOOR of the median of its non-zero entries."""
+    d = np.abs(np.asarray(tangent_diagonal, dtype=float))
+    return np.maximum(d, DIAGONAL_FLOOR * float(np.median(d[d > 0.0])))
