@@ -44,7 +44,13 @@ def test_second_run_is_refused_and_the_first_finishes_intact(tmp_path):
                           "loads.control.increment=0.5", "-q", "-o", str(out))
     partial = tmp_path / "same.h5.partial"
     wait_for(lambda: _steps_on_disk(partial) >= 1, 120, "the first run's first step", first)
-    second = icewall("run", CF4, *LINEAR, "-o", str(out))
+    # held still while the second runs: without this the first could finish (and release the
+    # lock) before the second starts, and the second would rightly run (a flaky failure)
+    first.send_signal(signal.SIGSTOP)
+    try:
+        second = icewall("run", CF4, *LINEAR, "-o", str(out))
+    finally:
+        first.send_signal(signal.SIGCONT)
     assert second.returncode == 2
     assert "being written by another icewall run" in one_error_line(second.stderr)
     _, err = first.communicate(timeout=300)
