@@ -309,6 +309,13 @@ class Analysis:
                                "snap_back and counted by icewall summary), or stop the run with "
                                "reason snap-back",
                                choices=("stop", "continue"))
+    trace_snap_backs: bool = option(False, doc="scheme newton: where displacement control "
+                                    "fails at its smallest step, first trace the snap-back "
+                                    "under the opening control of the cracking points (until "
+                                    "load and deflection rise together again) and take the "
+                                    "drop at a fixed deflection only where that fails; false "
+                                    "takes the drop at once, as a stroke-controlled test does "
+                                    "(docs/solver.md, item 17)")
     max_jumps: int = option(3, doc="times per run that a control step which does not converge "
                             "even at the smallest size and with every fallback iteration "
                             "scheme is retried once as one step of twice the increment from "

@@ -19,11 +19,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from icewall.errors import ConvergenceError
 from icewall.solve.control import Increment, PathState, Problem, StepFailed, _external_force_norm
 from icewall.solve.controls import LoadControl
 from icewall.solve.settings import SolverSettings
-from icewall.solve.transient import PseudoTransient
 
 log = logging.getLogger(__name__)
 
@@ -57,13 +55,16 @@ class Iterate:
 
 
 def _evaluate(problem: Problem, start: PathState, u: np.ndarray, P: float,
-              F_pre: np.ndarray, R: np.ndarray, lam_force: np.ndarray | None = None) -> Iterate:
+              F_pre: np.ndarray, R: np.ndarray, lam_force: np.ndarray | None = None,
+              dampers=None) -> Iterate:
     s, c = problem.structure, problem.constraints
     ev = s.evaluate(u, start.states, tangent=True)
     if not np.all(np.isfinite(ev.internal_force)):
         raise StepFailed("non-finite internal forces", "NaN")
     external = P * R + c.restrict(F_pre)
     structural = c.restrict(external - ev.internal_force)
+    if dampers is not None:  # a sub-step of a drop (icewall.solve.drop)
+        structural = structural - c.restrict(dampers.force(u))
     gap_force = c.restrict(c.constraint_force()) if lam_force is None else lam_force
     unbalance = structural - gap_force
     scale = max(_external_force_norm(c, external, ev.internal_force), start.load_scale, 1e-30)
@@ -85,17 +86,16 @@ PREDICTOR_PROBE = 1e-6
 
 def newton_increment(problem: Problem, settings: SolverSettings, start: PathState,
                      control, preload_factor: float, kind: str = "control",
-                     last_increment: np.ndarray | None = None,
-                     transient: PseudoTransient | None = None) -> Increment:
+                     last_increment: np.ndarray | None = None, dampers=None) -> Increment:
     """Iterate one increment to convergence by Newton-Raphson under `control`
     (icewall.solve.controls: load, displacement or dissipation control; the preload at
     `preload_factor`). Raises StepFailed when it does not converge in
     `settings.max_iterations`. `last_increment`: the displacements of the last converged
     increment; the predictor's tangent is taken a PREDICTOR_PROBE of it ahead of the committed
     state, so that a point that was loading on its envelope predicts with its loading branch
-    (at the committed state itself every point unloads: its secant). `transient`: iterate
-    with the pseudo-time shift of a drop step (icewall.solve.transient: full steps, no line
-    search, up to its own iteration count), converged on the same tolerances."""
+    (at the committed state itself every point unloads: its secant). `dampers`: a sub-step
+    of a drop at a fixed deflection (icewall.solve.drop.Dampers: their force in the residual,
+    D / dt in the matrix)."""
     c = problem.constraints
     R = c.restrict(problem.reference_load)
     F_pre = (np.zeros_like(start.u) if problem.preload is None
@@ -103,13 +103,13 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
     c.begin_step()
     forensics: dict[str, list[int]] = {"gap_flips": [], "line_search": [],
                                        "gauss_flag_changes": []}
-    current = _evaluate(problem, start, start.u.copy(), start.load_factor, F_pre, R)
+    current = _evaluate(problem, start, start.u.copy(), start.load_factor, F_pre, R,
+                        dampers=dampers)
     flags = problem.point_flags(current.evaluation.states)
     disp_norm, flips = math.inf, 0
     previous_moduli = None
     forensics["chords"] = []
-    limit = settings.max_iterations if transient is None else transient.max_iterations
-    previous_norm = current.load_norm
+    limit = settings.max_iterations
     for iteration in range(1, limit + 1):
         log.debug("newton %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
                   "gap flips %d, Gauss-point flag changes %s, step length %s", iteration,
@@ -132,17 +132,9 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         elif previous_moduli is not None:
             matrix_at = _chords_at_kinks(problem, start, current, previous_moduli, forensics)
         previous_moduli = current.evaluation.moduli
-        if transient is None:
-            du, dP, dm = _newton_direction(problem, current, control, matrix_at)
-            eta, trial = _line_search(problem, start, current, du, dP, dm, F_pre, R,
-                                      LINE_SEARCH_RISE if flips else 1.0)
-        else:
-            if iteration > 2:  # the first correction only meets the control's target
-                transient.after_iteration(previous_norm, current.load_norm)
-            du, dP, dm = _shifted_direction(problem, current, control, matrix_at, transient)
-            eta, trial = 1.0, _evaluate(problem, start, current.u + du, current.load_factor + dP,
-                                        F_pre, R, _trial_gap_force(problem, dm, 1.0))
-        previous_norm = current.load_norm
+        du, dP, dm = _newton_direction(problem, current, control, matrix_at, dampers)
+        eta, trial = _line_search(problem, start, current, du, dP, dm, F_pre, R,
+                                  LINE_SEARCH_RISE if flips else 1.0, dampers)
         forensics["line_search"].append(round(math.log2(1.0 / eta)))
         flips = c.apply(eta * dm, trial.u)
         forensics["gap_flips"].append(int(flips))
@@ -197,27 +189,14 @@ def _count_changes(before, after) -> int:
                    for a, b in zip(before, after, strict=True) if a is not None))
 
 
-def _shifted_direction(problem: Problem, current: Iterate, control, matrix_at,
-                       transient: PseudoTransient) -> tuple[np.ndarray, float, np.ndarray]:
-    """The direction of a drop step: K_t + D / dt, with 1/dt grown while the matrix is
-    singular."""
-    while True:
-        try:
-            return _newton_direction(problem, current, control, matrix_at, transient)
-        except ConvergenceError as exc:
-            if exc.reason != "singular system" or not transient.after_singular():
-                raise StepFailed(str(exc), exc.reason) from None
-
-
-def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
-                      transient: PseudoTransient | None = None
+def _newton_direction(problem: Problem, current: Iterate, control, matrix_at, dampers=None
                       ) -> tuple[np.ndarray, float, np.ndarray]:
     """(du, dP, dlam) of a full Newton step: one factorisation of the augmented tangent (plus
-    a drop step's D / dt), two solves (reference load and unbalance), the load factor from
+    a drop sub-step's D / dt), two solves (reference load and unbalance), the load factor from
     the control's row."""
     s, c = problem.structure, problem.constraints
     K = s.stiffness(matrix_at)
-    factor = c.factorize(K if transient is None else K + transient.shift(K))
+    factor = c.factorize(K if dampers is None else K + dampers.shift(K))
     rhs_unbalance = c.unbalance_rhs(current.structural, current.u)
     if isinstance(control, LoadControl):
         du, dm = c.split(factor.solve(rhs_unbalance))
@@ -237,7 +216,7 @@ def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
 
 def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.ndarray,
                  dP: float, dm: np.ndarray, F_pre: np.ndarray, R: np.ndarray,
-                 rise: float) -> tuple[float, Iterate]:
+                 rise: float, dampers=None) -> tuple[float, Iterate]:
     """Step length eta and the iterate it gives: the full step unless its unbalance (with the
     gap multipliers moved by eta dlam at their current states) exceeds `rise` times the
     current one; then halve, keeping the best step length tried."""
@@ -245,7 +224,7 @@ def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.nd
     reference = _norm(current.unbalance)
     for _ in range(LINE_SEARCH_CUTS + 1):
         trial = _evaluate(problem, start, current.u + eta * du, current.load_factor + eta * dP,
-                          F_pre, R, _trial_gap_force(problem, dm, eta))
+                          F_pre, R, _trial_gap_force(problem, dm, eta), dampers)
         merit = _norm(trial.unbalance)
         full = full or trial
         if best is None or merit < best[0]:
@@ -261,3 +240,16 @@ def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.nd
     if abs(dP) <= abs(current.load_factor):
         return 1.0, full
     return best[1], best[2]
+
+
+def static_load_norm(problem: Problem, inc: Increment, load_scale: float) -> float:
+    """Eq. 4.5 of a converged increment without any damper force: the unbalance of the
+    external loads, the internal forces and the gap forces, over the external force system
+    (never less than `load_scale`)."""
+    c = problem.constraints
+    applied = c.restrict(inc.load_factor * problem.reference_load + (
+        0.0 if problem.preload is None else inc.preload_factor * problem.preload))
+    unbalance = c.restrict(applied - inc.evaluation.internal_force - c.constraint_force())
+    scale = max(_external_force_norm(c, applied, inc.evaluation.internal_force), load_scale,
+                1e-30)
+    return _norm(unbalance) / scale

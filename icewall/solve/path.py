@@ -3,16 +3,17 @@ it to convergence, and yields it or cuts it. No fallback schemes and no frozen p
 that does not converge is cut, and the run stops with a reason when the smallest fails.
 
 The preload goes by load control. The control stage goes by displacement control while it
-converges; where it cannot at the smallest step (a snap-back of the control deflection: a crack
-releases more energy than the rest of the wall can take up at a fixed deflection), the steps are
-taken under a control that grows through the snap-back - the opening of the concrete points
-at or near cracking (`controls.OpeningControl`; the energy released, `DissipationControl`,
-for other laws) - until the load and the deflection rise together again. Where that fails
-too at its smallest step (or the tangent is singular), the load drops at a fixed deflection,
-as it does in a stroke-controlled test: one step to the next deflection iterated with a
-pseudo-time shift of the matrix (`transient.PseudoTransient`) and accepted on the same
-tolerances (`analysis.on_snap_back: stop` stops the run there instead). The step size
-(deflection or opening) follows the iteration count (`steps.StepSizeController`).
+converges. Where it cannot at the smallest step (a snap-back of the control deflection: a crack
+or a crushing zone releases more energy than the rest of the wall can take up at a fixed
+deflection, or the tangent is singular), the load drops at a fixed deflection, as it does in a
+stroke-controlled test: the step to the next deflection is taken through committed viscous
+sub-steps to a static equilibrium (`drop.drop_step`), accepted on the same tolerances and
+flagged `snap_back` (`analysis.on_snap_back: stop` stops the run there instead). With
+`analysis.trace_snap_backs` the snap-back is first traced under a control that grows through
+it - the opening of the concrete points at or near cracking (`controls.OpeningControl`; the
+energy released, `DissipationControl`, for other laws) - until the load and the deflection rise
+together again, and the drop is taken where that fails. The step size (deflection or opening)
+follows the iteration count (`steps.StepSizeController`).
 """
 
 from __future__ import annotations
@@ -40,10 +41,10 @@ from icewall.solve.controls import (
     OpeningControl,
     largest_principal,
 )
+from icewall.solve.drop import FIRST_INVERSE_STEP, drop_step
 from icewall.solve.newton import newton_increment
 from icewall.solve.settings import SolverSettings
 from icewall.solve.steps import StepSizeController
-from icewall.solve.transient import PseudoTransient
 
 log = logging.getLogger(__name__)
 
@@ -153,11 +154,13 @@ def _next_state(problem: Problem, state: PathState, inc: Increment, resume: tupl
 @dataclass
 class _Mode:
     """The control of the next step and its size: "displacement" (deflection step `size`),
-    "opening" (the snap-back control, `release`) or "drop" (at a fixed deflection)."""
+    "opening" (the snap-back control, `release`) or "drop" (at a fixed deflection, its
+    sub-steps starting from the 1/dt the last drop ended with, `damping`)."""
 
     name: str
     size: float
     release: float
+    damping: float = FIRST_INVERSE_STEP
 
     def control(self, problem: Problem, path: _Path, current: float,
                 steps: StepSizeController, settings: SolverSettings) -> tuple[object, str]:
@@ -177,9 +180,9 @@ class _Mode:
         reason = getattr(exc, "reason", "non-convergence")
         stop = settings.on_snap_back == "stop"
         if self.name == "drop":
-            raise ConvergenceError(f"{exc} at {where}: neither displacement control, nor the "
-                                   "opening control at its smallest step, nor a drop at a "
-                                   "fixed deflection converged", reason=reason) from None
+            raise ConvergenceError(f"{exc} at {where}: neither displacement control at its "
+                                   "smallest step nor a drop at a fixed deflection converged",
+                                   reason=reason) from None
         if self.name == "opening":
             self.release *= 0.5
             if self.release < SMALLEST_OPENING:
@@ -192,11 +195,11 @@ class _Mode:
             return
         if self.size > steps.smallest * (1 + 1e-9):
             self.size = steps.after_failure(self.size, where, reason, str(exc))
-        elif reason != "singular system":
+        elif reason != "singular system" and settings.trace_snap_backs:
             # no equilibrium at the next deflection: a snap-back, followed by its control
             self.release = FIRST_OPENING
             self._switch("opening", where)
-        elif stop:  # no control helps a singular tangent: only the drop would
+        elif stop:  # only the drop would go on
             raise ConvergenceError(f"{exc} at {where} with the smallest step "
                                    f"{steps.smallest:.3g} (analysis.on_snap_back: stop; "
                                    "'continue' takes the drop at a fixed deflection)",
@@ -234,8 +237,10 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
     c = problem.constraints
     steps = _controller(settings, settings.increment)
     mode, stagnant = _Mode("displacement", steps.largest, 0.0), 0
-    if resume:  # (size, release, 1.0 under the snap-back control, stagnant steps): below
-        mode = _Mode("opening" if resume[2] else "displacement", resume[0], resume[1])
+    if resume:  # (size, release, 1.0 under the snap-back control, stagnant steps, 1/dt of
+        # the drops): below
+        mode = _Mode("opening" if resume[2] else "displacement", resume[0], resume[1],
+                     resume[4] if len(resume) > 4 else FIRST_INVERSE_STEP)
         stagnant = int(resume[3])
     path = _Path(problem, state, preload)
     last_increment = state.last_increment
@@ -245,10 +250,12 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         control, where = mode.control(problem, path, current, steps, settings)
         tic = time.perf_counter()
         try:
-            inc = newton_increment(problem, settings, state, control, preload,
-                                   last_increment=last_increment,
-                                   transient=PseudoTransient() if mode.name == "drop"
-                                   else None)
+            if mode.name == "drop":
+                inc, mode.damping = drop_step(problem, settings, state, control, preload,
+                                              mode.damping, last_increment)
+            else:
+                inc = newton_increment(problem, settings, state, control, preload,
+                                       last_increment=last_increment)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
             log.info("%s: %s", where, exc)
@@ -265,10 +272,13 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         last_increment = inc.u - state.u
         state = _next_state(problem, state, inc, ("control", mode.size, mode.release,
                                                   float(mode.name == "opening"),
-                                                  float(stagnant)))
+                                                  float(stagnant), mode.damping))
         state.last_increment = last_increment
         path.state = state
         yield inc, state
+        if stagnant >= STAGNANT_STEPS and mode.name == "opening":
+            mode._switch("drop", where)  # the traced snap-back stalls: the test drops
+            stagnant = 0
         if stagnant >= STAGNANT_STEPS:  # after the step is on disk, as every converged one
             raise ConvergenceError(f"the path no longer moves at {where}: {stagnant} converged "
                                    "steps in a row changed neither the deflection nor the "

@@ -28,6 +28,7 @@ class SolverSettings:
     iteration_secant: str = "committed"
     scheme: str = "secant"  # secant (the thesis' iteration) | newton (solve/path.py)
     target_iterations: int = 6  # Newton: iterations per step the step-size controller aims at
+    trace_snap_backs: bool = False  # Newton: trace a snap-back (opening control) before a drop
 
 
 def solver_settings(deck: Deck) -> SolverSettings:
@@ -40,7 +41,7 @@ def solver_settings(deck: Deck) -> SolverSettings:
         reset_slip_each_step=deck.materials.interface.reset_slip_each_step,
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
         on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps,
-        scheme=a.scheme)
+        scheme=a.scheme, trace_snap_backs=a.trace_snap_backs)
 
 
 def scheme_warnings(deck: Deck) -> list[str]:

@@ -53,8 +53,9 @@ def newton_bar(length, n_el, E=30000.0, strength=3.0, weak=0.9, failure_strain=0
     return replace(problem, structure=structure), initial
 
 
-def newton_settings(target, increment, tolerance=1e-9, iterations=25, cuts=6):
-    return replace(settings(target, increment, tolerance, iterations, cuts), scheme="newton")
+def newton_settings(target, increment, tolerance=1e-9, iterations=25, cuts=6, trace=True):
+    return replace(settings(target, increment, tolerance, iterations, cuts), scheme="newton",
+                   trace_snap_backs=trace)
 
 
 def test_linear_bar_converges_in_one_newton_iteration():
@@ -200,8 +201,9 @@ def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections():
     # traced snap-back has separated the bar, no control converges (the tangent is singular:
     # the weak element has lost all stiffness); a stroke-controlled test then records zero
     # load at every larger stroke, and the weak element takes the whole stretch. Each step
-    # to the next deflection is a drop step (transient.PseudoTransient) accepted on the same
-    # tolerances: the closed form is P = 0, eps_xx = d / h in the weak element, 0 elsewhere.
+    # to the next deflection is a drop (drop.drop_step: committed viscous sub-steps) accepted
+    # on the same tolerances: the closed form is P = 0, eps_xx = d / h in the weak element, 0
+    # elsewhere.
     length, h, f, eps_f, area = 1000.0, 100.0, 0.9 * 3.0, 0.0003, 10.0
     problem, initial = newton_bar(length, 10, failure_strain=eps_f)
     chosen = replace(newton_settings(0.2, 0.02, cuts=3), on_snap_back="continue")
@@ -220,22 +222,42 @@ def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections():
     assert np.all(np.abs(strain[1:]) <= 1e-6 * 0.2 / h)
 
 
-def test_pseudo_time_grows_after_a_rise_and_shrinks_after_a_fall():
-    from icewall.solve.transient import LARGEST_INVERSE_STEP, PseudoTransient
+def test_without_tracing_the_snap_back_the_load_drops_at_the_peak_deflection():
+    # The snap-back bar without analysis.trace_snap_backs: past the peak deflection
+    # d_p = L f / E = 0.09 mm the softening branch lies at smaller deflections only (it turns
+    # back to h eps_f = 0.03 mm), so a stroke-controlled test drops at once to the separated
+    # bar: P = 0 at every larger stroke, the weak element taking the whole stretch d / h. The
+    # drop is taken by committed viscous sub-steps and must end on that closed form.
+    length, h, E, f, eps_f = 1000.0, 100.0, 30000.0, 0.9 * 3.0, 0.0003
+    problem, initial = newton_bar(length, 10, failure_strain=eps_f)
+    chosen = replace(newton_settings(0.2, 0.02, cuts=3, trace=False), on_snap_back="continue")
+    steps = list(follow_path(problem, chosen, initial))
+    d = np.array([inc.control_displacement for inc, _ in steps])
+    P = np.array([inc.load_factor for inc, _ in steps])
+    assert np.all(np.diff(d) > 0) and d[-1] == pytest.approx(0.2)  # the stroke never turns
+    peak = int(np.argmax(P))
+    assert P[peak] == pytest.approx(f * 10.0, rel=1e-9)
+    assert d[peak] <= length * f / E * (1 + 1e-9)
+    after = steps[peak + 1][0]
+    assert after.snap_back and after.forensics["drop_substeps"][0] >= 1
+    assert np.all(np.abs(P[peak + 1:]) <= 1e-6 * P[peak])
+    for inc, _ in steps[peak + 1:]:
+        assert inc.load_norm <= 1e-9  # the static unbalance, not the sub-steps' own
+        strain = inc.evaluation.strain[:, :, 0]
+        assert np.allclose(strain[0], inc.control_displacement / h, rtol=1e-6)
+        assert np.all(np.abs(strain[1:]) <= 1e-6 * inc.control_displacement / h)
 
-    t = PseudoTransient.from_tangent(np.array([4.0, 0.0, -2.0, 1e6]))
-    assert np.all(t.diagonal > 0.0)  # floored where the tangent lost its stiffness
-    assert t.shift().diagonal() == pytest.approx(t.inverse_step * t.diagonal)
-    first = t.inverse_step
-    t.after_iteration(1.0, 0.5)
-    assert t.inverse_step == pytest.approx(0.5 * first)
-    t.after_iteration(0.5, 0.6)
-    assert t.inverse_step == pytest.approx(2.0 * first)
-    while t.after_singular():
-        pass
-    assert t.inverse_step == LARGEST_INVERSE_STEP and not t.after_singular()
-    t.after_iteration(1.0, 2.0)
-    assert t.inverse_step == LARGEST_INVERSE_STEP
+
+def test_dampers_act_on_the_motion_of_the_sub_step():
+    from icewall.solve.drop import DIAGONAL_FLOOR, Dampers, floored_diagonal
+
+    D = floored_diagonal(np.array([4.0, 0.0, -2.0, 1e6]))
+    assert D[1] == pytest.approx(DIAGONAL_FLOOR * 4.0)  # the median of |4|, |-2|, 1e6: 4
+    assert D[2] == 2.0 and D[3] == 1e6
+    dampers = Dampers(D, 0.25, np.array([1.0, 1.0, 1.0, 1.0]))
+    u = np.array([1.0, 3.0, 0.0, 1.0])
+    assert dampers.force(u) == pytest.approx(0.25 * D * (u - 1.0))
+    assert dampers.shift().diagonal() == pytest.approx(0.25 * D)
 
 
 def test_on_snap_back_stop_stops_where_the_drop_would_be_taken():

@@ -1,0 +1,195 @@
+"""The load drop at a fixed deflection, taken as a stroke-controlled test takes it: a sequence
+of committed viscous sub-steps that ends at a static equilibrium.
+
+Where displacement control fails at its smallest step (past a peak, where the concrete under a
+load station crushes and the tangent is indefinite or singular), the step to the next
+deflection is solved as a dynamic relaxation with dampers on every equation and no mass (a
+gradient flow, backward Euler in a pseudo-time): each sub-step solves
+
+    P R + F_pre - F_int(u) - D (u - u_n) / dt - C^T lam = 0,    deflection = target
+
+by the Newton iteration of every step (`newton.newton_increment`, matrix K_t + D / dt), and is
+committed, so the concrete, the steel and the pairs follow the motion as they do in the test.
+(Iterating the whole drop as one increment from the state before it, with the damper only in
+the matrix - pseudo-transient continuation, docs/solver.md item 13 - evaluated the
+path-dependent laws over one large increment and stalled.) D is the diagonal of the tangent at
+the drop's start, floored; 1/dt falls while the sub-steps converge in few iterations (the flow
+speeds up) and rises after a failed one; a sub-step that fails with the stiffest dampers is
+retried with weaker ones (frozen dampers do not carry a point across a jump of its law). The
+sub-steps are the drop's path, not results: each converges to SUBSTEP_TOLERANCE times the
+deck's tolerances. A sub-step whose jack load runs away (a mechanism away from the control
+point) ends the drop as failed. The drop ends where the static unbalance (the damper
+force taken out) and the last sub-step's motion are within the tolerances of eqs. 4.4 and 4.5,
+or where a static Newton step from a sub-step converges: either way an equilibrium of the model
+at that deflection, on the same norms as every step. The sub-steps themselves are not written.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from icewall.errors import ConvergenceError
+from icewall.solve.control import Increment, PathState, Problem, StepFailed
+from icewall.solve.newton import newton_increment, static_load_norm
+from icewall.solve.settings import SolverSettings
+
+log = logging.getLogger(__name__)
+
+DIAGONAL_FLOOR = 1e-3
+"""D is floored at this fraction of its median: the points whose tangent has lost its
+stiffness (crushed and cracked) get a damper too."""
+FIRST_INVERSE_STEP = 1.0
+"""1/dt of a drop's first sub-step (dampers as stiff as the tangent's diagonal)."""
+LARGEST_INVERSE_STEP = 1e4
+"""A sub-step that fails with dampers this stiff ends the drop (failed)."""
+FAST, SLOW = 4, 10
+"""Sub-steps converged within FAST iterations halve 1/dt; beyond SLOW they double it."""
+CHECK_AT = 10.0
+"""A static Newton step is tried once the damper force is within this multiple of the load
+tolerance (then at most every CHECK_EVERY sub-steps)."""
+CHECK_EVERY = 20
+SUBSTEP_TOLERANCE = 10.0
+"""The sub-steps are the drop's path, not results: each converges to this multiple of the
+deck's tolerances; the state the drop ends at meets the deck's own."""
+SMALLEST_INVERSE_STEP = 1e-4
+"""Once a sub-step has failed at LARGEST_INVERSE_STEP (frozen dampers do not get a point across
+a jump of its law: docs/solver.md items 7 and 10), it is retried with dampers 4x weaker each
+time, from FIRST_INVERSE_STEP / 4 down to this."""
+SUBSTEPS = 2000
+"""Sub-steps of one drop before it counts as failed."""
+RUNAWAY = 100.0
+"""A sub-step whose jack loads exceed this multiple of the largest external force system so
+far (eq. 4.5's reference), or of the dampers' force when the whole wall moves by the drop's
+deflection step, has run away - the loads push a mechanism away from the control point
+against the dampers: the drop fails."""
+
+
+def floored_diagonal(tangent_diagonal: np.ndarray) -> np.ndarray:
+    """|diag K_t| floored at DIAGONAL_FLOOR of the median of its non-zero entries."""
+    d = np.abs(np.asarray(tangent_diagonal, dtype=float))
+    return np.maximum(d, DIAGONAL_FLOOR * float(np.median(d[d > 0.0])))
+
+
+@dataclass(frozen=True)
+class Dampers:
+    """Dampers D on every equation over a sub-step of length dt that starts at `origin`."""
+
+    diagonal: np.ndarray
+    inverse_step: float
+    origin: np.ndarray
+
+    def force(self, u: np.ndarray) -> np.ndarray:
+        """D (u - origin) / dt, the damper force the residual carries."""
+        return self.inverse_step * self.diagonal * (u - self.origin)
+
+    def shift(self, tangent: sp.spmatrix | None = None) -> sp.dia_matrix:
+        """D / dt, added to the tangent."""
+        return sp.diags(self.inverse_step * self.diagonal)
+
+
+def drop_step(problem: Problem, settings: SolverSettings, state: PathState, control,
+              preload: float, inverse_step: float = FIRST_INVERSE_STEP,
+              last_increment: np.ndarray | None = None) -> tuple[Increment, float]:
+    """Take the step to `control`'s deflection through committed viscous sub-steps; return the
+    equilibrium it ends at (its iterations: all sub-steps') and the 1/dt to start the next
+    drop with. StepFailed when a sub-step fails at every 1/dt, the load runs away or no
+    equilibrium is reached in SUBSTEPS.
+
+    The first sub-step moves the control deflection against the dampers. Where the jack loads
+    move the control point little through K_t + D / dt (TF-1: jacks away from midspan, the
+    dampers a stiff foundation under every node), the load it takes runs away; it is then
+    retried with the dampers at rest on the last converged increment's motion scaled to the
+    step (`last_increment`), so that they resist only the departure from it."""
+    c = problem.constraints
+    evaluation = state.evaluation or problem.structure.evaluate(state.u, state.states,
+                                                                 tangent=True)
+    diagonal = floored_diagonal(problem.structure.stiffness(evaluation).diagonal())
+    sub, iterations, next_check = state, 0, 0
+    reference = float(np.linalg.norm(c.restrict(problem.reference_load)))
+    step = abs(control.target + float(state.u[problem.control_equation]))
+    origin = state.u.copy()
+    loose = replace(settings, tolerance_load=SUBSTEP_TOLERANCE * settings.tolerance_load,
+                    tolerance_displacement=SUBSTEP_TOLERANCE * settings.tolerance_displacement)
+    weakening = False  # retrying a failed sub-step with weaker dampers
+    for k in range(SUBSTEPS):
+        dampers = Dampers(diagonal, inverse_step, origin)
+        try:
+            inc = newton_increment(problem, loose, sub, control, preload, dampers=dampers)
+            bound = max(state.load_scale, inverse_step * float(diagonal.sum()) * step)
+            if abs(inc.load_factor) * reference > RUNAWAY * bound:
+                raise StepFailed(f"the load runs away ({inc.load_factor:.4g})", "runaway")
+        except (StepFailed, ConvergenceError) as exc:
+            c.rollback()
+            moving = _moving_origin(problem, state, step, last_increment)
+            if (exc.reason == "runaway" and k == 0 and moving is not None
+                    and not np.array_equal(origin, moving)):
+                origin = moving
+                log.debug("drop sub-step 0 ran away: the dampers follow the last increment")
+                continue
+            if inverse_step >= LARGEST_INVERSE_STEP and not weakening:
+                weakening, inverse_step = True, 4.0 * FIRST_INVERSE_STEP
+            if exc.reason == "runaway":
+                raise StepFailed(f"drop at a fixed deflection: sub-step {k}: {exc}",
+                                 exc.reason) from None
+            if weakening and inverse_step <= SMALLEST_INVERSE_STEP:
+                raise StepFailed(f"drop at a fixed deflection: sub-step {k} failed with 1/dt "
+                                 f"from {FIRST_INVERSE_STEP:.3g} to {LARGEST_INVERSE_STEP:.3g} "
+                                 f"and down to {inverse_step:.3g} ({exc})", exc.reason) from None
+            inverse_step = (0.25 * inverse_step if weakening
+                            else min(4.0 * inverse_step, LARGEST_INVERSE_STEP))
+            log.debug("drop sub-step %d failed (%s): 1/dt %.3g", k, exc, inverse_step)
+            continue
+        c.commit()
+        weakening = False
+        iterations += inc.iterations
+        origin = inc.u.copy()
+        sub = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
+                        inc.preload_factor, state.load_scale)
+        static = static_load_norm(problem, inc, state.load_scale)
+        moved = float(np.linalg.norm(inc.u - dampers.origin)) / max(
+            float(np.linalg.norm(inc.u)), 1e-30)
+        log.debug("drop sub-step %d: 1/dt %.3g, %d iterations, load factor %.6g, static load "
+                  "norm %.3e, moved %.3e", k, inverse_step, inc.iterations, inc.load_factor,
+                  static, moved)
+        if static <= settings.tolerance_load and moved <= settings.tolerance_displacement:
+            inc.load_norm = static
+            return _ended(inc, iterations, k, state), inverse_step
+        if static <= CHECK_AT * settings.tolerance_load and k >= next_check:
+            next_check = k + CHECK_EVERY
+            try:
+                final = newton_increment(problem, settings, sub, control, preload)
+            except (StepFailed, ConvergenceError) as exc:
+                c.rollback()
+                log.debug("drop: static step at sub-step %d failed (%s)", k, exc)
+            else:
+                return _ended(final, iterations + final.iterations, k, state), inverse_step
+        if inc.iterations <= FAST:
+            inverse_step *= 0.5
+        elif inc.iterations > SLOW:
+            inverse_step = min(2.0 * inverse_step, LARGEST_INVERSE_STEP)
+    raise StepFailed(f"drop at a fixed deflection: no equilibrium after {SUBSTEPS} sub-steps",
+                     "non-convergence")
+
+
+def _moving_origin(problem: Problem, state: PathState, step: float,
+                   last_increment: np.ndarray | None) -> np.ndarray | None:
+    """The state moved along the last increment by `step` of deflection (None without one
+    that moved the deflection)."""
+    if last_increment is None:
+        return None
+    moved = -float(last_increment[problem.control_equation])
+    if not moved > 0.0:
+        return None
+    return state.u + (step / moved) * last_increment
+
+
+def _ended(inc: Increment, iterations: int, substep: int, start: PathState) -> Increment:
+    log.info("drop at a fixed deflection: %d sub-steps, %d iterations, load factor %.6g -> "
+             "%.6g", substep + 1, iterations, start.load_factor, inc.load_factor)
+    inc.iterations = iterations
+    inc.forensics["drop_substeps"] = [substep + 1]
+    return inc
