@@ -16,12 +16,16 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from icewall.solve.control import Increment, PathState, Problem, StepFailed, _external_force_norm
 from icewall.solve.controls import LoadControl
 from icewall.solve.settings import SolverSettings
+
+if TYPE_CHECKING:
+    from icewall.solve.drop import Dampers
 
 log = logging.getLogger(__name__)
 
@@ -56,7 +60,7 @@ class Iterate:
 
 def _evaluate(problem: Problem, start: PathState, u: np.ndarray, P: float,
               F_pre: np.ndarray, R: np.ndarray, lam_force: np.ndarray | None = None,
-              dampers=None) -> Iterate:
+              dampers: Dampers | None = None) -> Iterate:
     s, c = problem.structure, problem.constraints
     ev = s.evaluate(u, start.states, tangent=True)
     if not np.all(np.isfinite(ev.internal_force)):
@@ -86,7 +90,8 @@ PREDICTOR_PROBE = 1e-6
 
 def newton_increment(problem: Problem, settings: SolverSettings, start: PathState,
                      control, preload_factor: float, kind: str = "control",
-                     last_increment: np.ndarray | None = None, dampers=None) -> Increment:
+                     last_increment: np.ndarray | None = None,
+                     dampers: Dampers | None = None) -> Increment:
     """Iterate one increment to convergence by Newton-Raphson under `control`
     (icewall.solve.controls: load, displacement or dissipation control; the preload at
     `preload_factor`). Raises StepFailed when it does not converge in
@@ -189,8 +194,8 @@ def _count_changes(before, after) -> int:
                    for a, b in zip(before, after, strict=True) if a is not None))
 
 
-def _newton_direction(problem: Problem, current: Iterate, control, matrix_at, dampers=None
-                      ) -> tuple[np.ndarray, float, np.ndarray]:
+def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
+                      dampers: Dampers | None = None) -> tuple[np.ndarray, float, np.ndarray]:
     """(du, dP, dlam) of a full Newton step: one factorisation of the augmented tangent (plus
     a drop sub-step's D / dt), two solves (reference load and unbalance), the load factor from
     the control's row."""
@@ -216,7 +221,7 @@ def _newton_direction(problem: Problem, current: Iterate, control, matrix_at, da
 
 def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.ndarray,
                  dP: float, dm: np.ndarray, F_pre: np.ndarray, R: np.ndarray,
-                 rise: float, dampers=None) -> tuple[float, Iterate]:
+                 rise: float, dampers: Dampers | None = None) -> tuple[float, Iterate]:
     """Step length eta and the iterate it gives: the full step unless its unbalance (with the
     gap multipliers moved by eta dlam at their current states) exceeds `rise` times the
     current one; then halve, keeping the best step length tried."""
