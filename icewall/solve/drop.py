@@ -112,6 +112,7 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
     reference = float(np.linalg.norm(c.restrict(problem.reference_load)))
     step = abs(control.target + float(state.u[problem.control_equation]))
     origin = state.u.copy()
+    moving = _moving_origin(problem, state, step, last_increment)  # after a runaway
     loose = replace(settings, tolerance_load=SUBSTEP_TOLERANCE * settings.tolerance_load,
                     tolerance_displacement=SUBSTEP_TOLERANCE * settings.tolerance_displacement)
     weakening = False  # retrying a failed sub-step with weaker dampers
@@ -124,7 +125,6 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
                 raise StepFailed(f"the load runs away ({inc.load_factor:.4g})", "runaway")
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
-            moving = _moving_origin(problem, state, step, last_increment)
             if (exc.reason == "runaway" and k == 0 and moving is not None
                     and not np.array_equal(origin, moving)):
                 origin = moving
