@@ -135,6 +135,14 @@ class Concrete:
         "strength and strain are the uniaxial f'c, eps_c (equal), or at least those (floor: the "
         "errata's signed reading, under which out-of-plane confinement in plane strain raises "
         "them again)", choices=("equal", "floor"))
+    mode_rule_band: float = option(
+        0.0, doc="width of the band, as a fraction of f't, over which the 3.2.5 mode rules "
+        "(b) and (c) blend in as a principal stress changes sign: a compressive strength "
+        "moves from the surface's value to rule (b)'s as the largest tension grows from 0 to "
+        "the band, a tensile one from rule (c)'s to the surface's as the largest compression "
+        "does. 0 = the thesis' sharp rules, under which the strengths jump at a sign change "
+        "and the converged (newton) scheme may find no equilibrium next to such a point",
+        minimum=0.0, maximum=10.0)
     trial_stress: str = option(
         "corotational", doc="trial stress of Fig. 3.12 step 3: corotational = committed "
         "principal stresses carried with the rotating axes plus C dEps between the committed "

@@ -88,7 +88,8 @@ def parameter_tuple(params: Any) -> tuple[float, ...]:
               params.eps_t, params.peak_strain_slope,
               params.compression_tension_rule == "equal", *surface.a, *surface.b,
               surface.sigma_limit, concrete.LOADING_TOLERANCE, uniaxial.SECANT_FLOOR,
-              orthotropic.PHI_MIN, orthotropic.ANGLE_TOLERANCE]
+              orthotropic.PHI_MIN, orthotropic.ANGLE_TOLERANCE,
+              params.mode_rule_band * params.ft]
     return tuple(float(v) for v in values)
 
 

@@ -28,7 +28,7 @@ inline = njit(cache=True, error_model="numpy", inline="always")  # lets loops ve
 # cached kernel would keep the values of constants imported from other files
 (P_E0, P_NU0, P_NU_MAX, P_FC, P_FT, P_EPS_C, P_EPS_T, P_SLOPE, P_RULE_EQUAL,
  P_A0, P_A1, P_A2, P_B0, P_B1, P_B2, P_LIMIT,
- P_LOADING_TOLERANCE, P_SECANT_FLOOR, P_PHI_MIN, P_ANGLE_TOLERANCE) = range(20)
+ P_LOADING_TOLERANCE, P_SECANT_FLOOR, P_PHI_MIN, P_ANGLE_TOLERANCE, P_MODE_BAND) = range(21)
 # rows of the (n, N_WORK, 3) work array carried between the passes: per direction, then
 # W_RAY: sigma_bar, tau_bar, max |p| of the unit ray; W_AXES: cos, sin of beta
 W_TRIAL, W_EPS_U, W_STRENGTH, W_PEAK, W_LOCAL, W_RAY, W_AXES = range(7)
@@ -253,16 +253,27 @@ def uniaxial_strengths(W, i, scale, prm):
     fc, ft = prm[P_FC], prm[P_FT]
     mag = _max(_max(abs(W[i, W_TRIAL, 0]), abs(W[i, W_TRIAL, 1])), abs(W[i, W_TRIAL, 2]))
     any_tension = any_compression = False
+    tension = compression = 0.0  # the largest of each (mode_rule_weights)
     for k in range(3):
         p = W[i, W_TRIAL, k]
         nonzero = not (abs(p) <= ZERO_TOL * mag or mag <= 1e-12 * fc)
         any_tension |= p > 0.0 and nonzero
         any_compression |= p < 0.0 and nonzero
+        tension = _max(tension, p) if nonzero else tension
+        compression = _max(compression, -p) if nonzero else compression
+    band = prm[P_MODE_BAND]
+    in_tension = _min(_max(tension / band, 0.0), 1.0) if band > 0.0 else 0.0
+    in_compression = 1.0 - _min(_max(compression / band, 0.0), 1.0) if band > 0.0 else 0.0
     for k in range(3):
         p = W[i, W_TRIAL, k]
         strength = scale * p
         if abs(p) <= ZERO_TOL * mag or mag <= 1e-12 * fc:  # uniaxial fallback (errata §3)
             strength = -fc if W[i, W_EPS_U, k] < 0.0 else ft
+        elif band > 0.0 and p < 0.0:  # rule (b) over the band
+            rule = -fc if prm[P_RULE_EQUAL] != 0.0 else _min(strength, -fc)
+            strength = (1.0 - in_tension) * strength + in_tension * rule
+        elif band > 0.0 and p > 0.0:  # rule (c) over the band
+            strength = (1.0 - in_compression) * strength + in_compression * _max(strength, ft)
         elif p < 0.0 and any_tension:  # rule (b)
             strength = -fc if prm[P_RULE_EQUAL] != 0.0 else _min(strength, -fc)
         elif p > 0.0 and not any_compression:  # rule (c)

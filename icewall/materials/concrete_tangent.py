@@ -68,7 +68,11 @@ from icewall.materials.orthotropic import (
     orthotropic_normal_stiffness,
     strain_rotation,
 )
-from icewall.materials.ultimate_surface import strength_scale_gradient
+from icewall.materials.ultimate_surface import (
+    mode_rule_weights,
+    strength_scale,
+    strength_scale_gradient,
+)
 
 RELATIVE_STEP = 1e-6
 """Central-difference step on the principal strains, relative to the point's strain size (at
@@ -139,6 +143,8 @@ def _strength_jacobian(trial: np.ndarray, strength: np.ndarray, loading: np.ndar
     of solving the surface again."""
     largest = np.abs(trial).max(axis=1, keepdims=True)
     zero = (np.abs(trial) <= 1e-6 * largest) | (largest <= 1e-12 * params.fc)
+    if params.mode_rule_band > 0.0:
+        return _blended_strength_jacobian(trial, zero, loading, params)
     tension, compression = (trial > 0.0) & ~zero, (trial < 0.0) & ~zero
     any_tension = tension.any(axis=1, keepdims=True)
     any_compression = compression.any(axis=1, keepdims=True)
@@ -158,6 +164,50 @@ def _strength_jacobian(trial: np.ndarray, strength: np.ndarray, loading: np.ndar
         gradient = strength_scale_gradient(p, scale, params.fc, params.surface, capped)
         derivative[rows] = scale[:, None, None] * np.eye(3) + p[:, :, None] * gradient[:, None, :]
     return derivative * follows[:, :, None]
+
+
+def _blended_strength_jacobian(trial: np.ndarray, zero: np.ndarray, loading: np.ndarray,
+                               params: Any) -> np.ndarray:
+    """`_strength_jacobian` with the mode rules blended over a band (`mode_rule_weights`):
+    sigma_ic = (1 - w) s sigma_i + w rule_i, so d sigma_ic = (1 - w + w [rule_i follows the
+    ray]) d(s sigma_i) + (rule_i - s sigma_i) dw, w a clipped linear function of the largest
+    tension (rule (b)) or compression (rule (c)). The scale s is solved again (the blended
+    strengths are not on the ray)."""
+    fc, ft, band = params.fc, params.ft, params.mode_rule_band * params.ft
+    active = loading & ~zero
+    derivative = np.zeros(trial.shape + (3,))
+    rows = np.nonzero(active.any(axis=1))[0]
+    if rows.size == 0:
+        return derivative
+    p, nil = trial[rows], zero[rows]
+    scale, capped = strength_scale(p, fc, params.surface, max_scale=MAX_SCALE,
+                                   return_capped=True)
+    on_ray = p * scale[:, None]
+    ray_slope = (scale[:, None, None] * np.eye(3)
+                 + p[:, :, None] * strength_scale_gradient(p, scale, fc, params.surface,
+                                                           capped)[:, None, :])
+    compression, tension = (p < 0.0) & ~nil, (p > 0.0) & ~nil
+    equal = params.compression_tension_rule == "equal"
+    rule = np.where(compression, -fc if equal else np.minimum(on_ray, -fc),
+                    np.maximum(on_ray, ft))
+    follows = np.where(compression, False if equal else on_ray < -fc, on_ray > ft)
+    in_tension, in_compression = mode_rule_weights(p, nil, params)
+    weight = np.where(compression, in_tension, in_compression)
+    # dw / d sigma_j: at the largest tension (rule (b)) or compression (rule (c)), in the band
+    nonzero = np.where(nil, 0.0, p)
+    by_tension = np.zeros_like(p)
+    by_compression = np.zeros_like(p)
+    index = np.arange(p.shape[0])
+    inside = (in_tension[:, 0] > 0.0) & (in_tension[:, 0] < 1.0)
+    by_tension[index, np.argmax(nonzero, axis=1)] = np.where(inside, 1.0 / band, 0.0)
+    inside = (in_compression[:, 0] > 0.0) & (in_compression[:, 0] < 1.0)
+    by_compression[index, np.argmax(-nonzero, axis=1)] = np.where(inside, 1.0 / band, 0.0)
+    weight_slope = np.where(compression[:, :, None], by_tension[:, None, :],
+                            by_compression[:, None, :])
+    blended = (((1.0 - weight) + weight * follows)[:, :, None] * ray_slope
+               + (rule - on_ray)[:, :, None] * weight_slope)
+    derivative[rows] = blended
+    return derivative * active[:, :, None]
 
 
 def _peak_strain_slope(strength: np.ndarray, params: Any) -> np.ndarray:

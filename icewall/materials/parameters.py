@@ -85,6 +85,9 @@ class ConcreteParameters:
     # §3.2.5 rule (b) in compression-tension states: "equal" = the compressive parameters are
     # the uniaxial f'c, eps_c; "floor" = at least those (errata §3's signed reading)
     compression_tension_rule: str = "equal"
+    # width of the band of a principal stress, as a fraction of f't, over which rules (b) and
+    # (c) of §3.2.5 blend in as it changes sign (0: the thesis' sharp rules, a jump)
+    mode_rule_band: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("fc", "E0", "ft", "eps_c", "eps_t", "Gf", "G_cr", "h_c", "k_t", "k_c"):
@@ -97,6 +100,8 @@ class ConcreteParameters:
             raise ValueError("peak_strain_slope must be >= 0")
         if self.compression_tension_rule not in ("equal", "floor"):
             raise ValueError("compression_tension_rule must be 'equal' or 'floor'")
+        if not (math.isfinite(self.mode_rule_band) and 0.0 <= self.mode_rule_band <= 10.0):
+            raise ValueError(f"mode_rule_band must be in [0, 10], got {self.mode_rule_band}")
 
     @property
     def snap_back_tension(self) -> bool:
@@ -111,7 +116,8 @@ class ConcreteParameters:
 
 
 _DEFAULTS = ("E0", "ft", "eps_c", "eps_t", "nu0", "Gf", "alpha", "G_cr", "k_t", "k_c",
-             "nu_max", "surface", "peak_strain_slope", "compression_tension_rule")
+             "nu_max", "surface", "peak_strain_slope", "compression_tension_rule",
+             "mode_rule_band")
 _SURFACE_KEYS = ("fcb_ratio", "f1", "f2")
 
 
@@ -168,5 +174,6 @@ def derive_concrete_parameters(fc: float, h_c: float, **overrides: object) -> Co
         Gf=Gf, alpha=alpha, G_cr=G_cr, h_c=float(h_c), k_t=k_t, k_c=k_c,
         nu_max=float(get("nu_max", 0.49)), surface=surface,  # type: ignore[arg-type]
         peak_strain_slope=float(get("peak_strain_slope", 3.0)),
-        compression_tension_rule=str(get("compression_tension_rule", "equal")))
+        compression_tension_rule=str(get("compression_tension_rule", "equal")),
+        mode_rule_band=float(get("mode_rule_band", 0.0)))
 

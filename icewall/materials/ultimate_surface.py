@@ -317,7 +317,9 @@ def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParamete
     with signed stresses (errata §3 "Sign convention"): (a) triaxial compression: from the
     surface; (b) compression-tension: tension from the surface, compression equal to f'c
     (params.compression_tension_rule "equal") or at least f'c in magnitude ("floor");
-    (c) all-tension: tension at least f't. Components with |sigma_i| <= zero_tol
+    (c) all-tension: tension at least f't; with ``params.mode_rule_band`` > 0 rules (b) and
+    (c) blend in over a band of the other components' stresses (`mode_rule_weights`).
+    Components with |sigma_i| <= zero_tol
     max|sigma| (e.g. sigma3 = 0 in plane stress) and all components of a zero state
     (max|sigma| <= 1e-12 f'c) fall back to the uniaxial values (errata §3, "Using the strength
     surface"): -f'c where ``strain_sign`` (e.g. sign of eps_iu) or else the stress is negative,
@@ -340,9 +342,31 @@ def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParamete
     # a cap, read signed (errata §3) a floor; "equal" applies both, "floor" the errata's
     rule_b = (np.full_like(sic, -fc) if params.compression_tension_rule == "equal"
               else np.minimum(sic, -fc))
+    rule_c = np.maximum(sic, ft)
+    if params.mode_rule_band > 0.0:  # the rules blend in over the band (mode_rule_weights)
+        in_tension, in_compression = mode_rule_weights(p, zero, params)
+        out = np.where(comp, (1.0 - in_tension) * sic + in_tension * rule_b, out)
+        out = np.where(tens, (1.0 - in_compression) * sic + in_compression * rule_c, out)
+        return np.where(zero, fallback, out)
     out = np.where(comp & any_t, rule_b, out)
-    out = np.where(tens & ~any_c, np.maximum(sic, ft), out)  # rule (c)
+    out = np.where(tens & ~any_c, rule_c, out)  # rule (c)
     return np.where(zero, fallback, out)
+
+
+def mode_rule_weights(principal: np.ndarray, zero: np.ndarray, params: ConcreteParameters
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """How far rules (b) and (c) of §3.2.5 apply, (n, 1) each, with a band of width
+    b = ``params.mode_rule_band`` f't: rule (b) (a compressive component in a compression-
+    tension state) by min(t / b, 1), t the largest tension; rule (c) (a tensile component in
+    all-tension) by 1 - min(c / b, 1), c the largest compression (zero components count
+    neither). With b = 0 the thesis' sharp rules, whose strengths jump where a principal
+    stress changes sign (docs/solver.md items 7, 10 and 18); the band makes them continuous
+    and leaves every state with no principal stress of the other sign within b unchanged."""
+    band = params.mode_rule_band * params.ft
+    nonzero = np.where(zero, 0.0, principal)
+    tension = np.max(np.maximum(nonzero, 0.0), axis=1, keepdims=True)
+    compression = np.max(np.maximum(-nonzero, 0.0), axis=1, keepdims=True)
+    return (np.clip(tension / band, 0.0, 1.0), 1.0 - np.clip(compression / band, 0.0, 1.0))
 
 
 def equivalent_uniaxial_peak_strains(sigma_ic: ArrayLike, params: ConcreteParameters

@@ -87,6 +87,9 @@ def _parameters(variant: str, n: int):
         return concrete_point_parameters(PARAMS, np.linspace(20.0, 200.0, n), {})
     if variant == "floor":  # §3.2.5 rule (b) in the errata's signed reading
         return derive_concrete_parameters(53.5, 100.0, compression_tension_rule="floor")
+    if variant == "band":  # and the mode rules blended over a band of the stresses
+        return derive_concrete_parameters(53.5, 100.0, compression_tension_rule="floor",
+                                          mode_rule_band=0.5)
     return PARAMS
 
 
@@ -127,7 +130,7 @@ def _reference(strain, state, params, formulation, trial, frozen):
     return stress, new
 
 
-@pytest.mark.parametrize("variant", ["scalar", "per-point", "floor"])
+@pytest.mark.parametrize("variant", ["scalar", "per-point", "floor", "band"])
 @pytest.mark.parametrize("trial", TRIALS)
 @pytest.mark.parametrize("formulation", FORMULATIONS)
 def test_update_equals_numpy_along_the_paths(formulation, trial, variant):
@@ -235,18 +238,22 @@ def test_property_random_paths_equal_numpy(path, formulation, trial, freeze):
         state = reference[1]
 
 
-@pytest.mark.parametrize("rule", ["equal", "floor"])
-def test_strength_surface_and_mode_rules_equal_numpy(rule):
+@pytest.mark.parametrize(("rule", "band"), [("equal", 0.0), ("floor", 0.0), ("equal", 0.4),
+                                            ("floor", 0.4)])
+def test_strength_surface_and_mode_rules_equal_numpy(rule, band):
     """sigma_ic on the ray of a trial stress, the kernel's passes against
     equivalent_uniaxial_strengths: rays that miss the surface below the cap (hydrostatic
-    compression), a zero state, zero components (the strain-sign fallback), rules (a)-(c)."""
-    params = derive_concrete_parameters(53.5, 100.0, compression_tension_rule=rule)
+    compression), a zero state, zero components (the strain-sign fallback), rules (a)-(c),
+    sharp and blended over a band (states with a component inside it included)."""
+    params = derive_concrete_parameters(53.5, 100.0, compression_tension_rule=rule,
+                                        mode_rule_band=band)
     rng = np.random.default_rng(3)
     trial = np.vstack([[[0.0, 0.0, 0.0], [-30.0, -30.0, -30.0], [-30.0, -30.0, -29.0],
                         [2.0, 2.0, 2.0], [3.0, 0.0, 0.0], [-40.0, 0.0, 1e-9], [0.0, -40.0, 0.0],
                         [-50.0, -60.0, 0.0], [2.0, -50.0, -10.0], [1.0, 2.0, -70.0],
-                        [-1e-13, 0.0, 0.0]],
-                       rng.uniform(-80.0, 4.0, (40, 3))])
+                        [-1e-13, 0.0, 0.0], [-4.4, 2e-4, -9.1], [-4.4, 0.3, -9.1],
+                        [2.0, -0.2, 1.0], [2.0, -0.05, -0.01]],
+                       rng.uniform(-80.0, 4.0, (40, 3)), rng.uniform(-1.0, 1.0, (20, 3))])
     sign = np.where(rng.random(trial.shape) < 0.5, -1.0, 1.0)
     expected = equivalent_uniaxial_strengths(trial, params, strain_sign=sign)
     _, capped = strength_scale(trial, params.fc, params.surface, return_capped=True)

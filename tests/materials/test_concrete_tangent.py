@@ -7,6 +7,7 @@ on that branch.
 
 from __future__ import annotations
 
+import dataclasses
 from functools import partial
 
 import numpy as np
@@ -293,3 +294,59 @@ def test_near_hydrostatic_compression_on_the_capped_ray():
     for direction in _directions("axisymmetric", 1e-3, 3):
         expected = _differences(update, strain, state, "axisymmetric", direction, 1e-7)
         assert np.abs(tangent @ direction - expected).max() <= 1e-6 * np.abs(expected).max()
+
+
+BANDED = derive_concrete_parameters(53.5, 50.0, compression_tension_rule="floor",
+                                    mode_rule_band=0.5)
+
+
+@pytest.mark.parametrize("stress", [[0.3, -10.0, -4.0], [1.0, -0.4, 0.6], [-0.2, 0.9, -30.0],
+                                    [0.5, -45.0, -80.0]])
+def test_blended_strengths_slope_matches_differences(stress):
+    """d sigma_ic / d trial with the mode rules blended over a band (0.5 f't): states inside
+    it (a tension or compression below 1.2 MPa against components of the other sign)."""
+    from icewall.materials.concrete_tangent import _strength_jacobian
+    from icewall.materials.ultimate_surface import equivalent_uniaxial_strengths
+
+    trial = np.array([stress])
+    loading = np.ones((1, 3), dtype=bool)
+    slope = _strength_jacobian(trial, equivalent_uniaxial_strengths(trial, BANDED), loading,
+                               BANDED)[0]
+    h = 1e-6
+    for j in range(3):
+        step = h * np.eye(3)[j]
+        expected = (equivalent_uniaxial_strengths(trial + step, BANDED)
+                    - equivalent_uniaxial_strengths(trial - step, BANDED))[0] / (2.0 * h)
+        np.testing.assert_allclose(slope[:, j], expected, rtol=1e-6, atol=1e-6)
+
+
+@pytest.mark.parametrize("rule", ["equal", "floor"])
+@pytest.mark.parametrize("formulation", ["plane_strain", "axisymmetric"])
+def test_tangent_matches_differences_inside_the_mode_rule_band(formulation, rule):
+    """A compressed point whose lateral principal stress is a small tension, inside the band
+    of rule (b): the whole consistent tangent against central differences of the update."""
+    params = dataclasses.replace(BANDED, compression_tension_rule=rule)
+    band = params.mode_rule_band * params.ft
+
+    def lateral_stress(a: float) -> tuple[float, np.ndarray, ConcreteState]:
+        strain = np.array([[-0.6 * EC, a, 0.0, 0.0]])
+        if formulation == "axisymmetric":
+            strain[0, 2] = -0.1 * EC
+        state = ConcreteState.initial(1, params)
+        _, _, state = update_concrete(0.3 * strain, state, params, formulation)
+        stress = update_concrete(strain, state, params, formulation, with_moduli=False)[0]
+        return float(np.sort(stress[0, :3])[-1]), strain, state
+
+    low, high = 0.0, 0.6 * EC  # lateral stress rises with the lateral strain: bisect to band/2
+    for _ in range(60):
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if lateral_stress(mid)[0] < 0.5 * band else (low, mid)
+    largest, strain, state = lateral_stress(0.5 * (low + high))
+    assert 0.2 * band < largest < 0.8 * band
+    tangent = consistent_tangent(strain, state, params, formulation, "corotational")[0]
+    update = partial(update_concrete, trial_stress="corotational", with_moduli=False)
+    for direction in _directions(formulation, 1e-3 * float(np.abs(strain).max())):
+        plus = update(strain + 1e-4 * direction, state, params, formulation)[0]
+        minus = update(strain - 1e-4 * direction, state, params, formulation)[0]
+        expected = (plus - minus)[0] / 2e-4
+        assert np.abs(tangent @ direction - expected).max() <= 1e-5 * np.abs(expected).max()
