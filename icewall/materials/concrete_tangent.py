@@ -186,7 +186,7 @@ def _blended_strength_jacobian(trial: np.ndarray, zero: np.ndarray, loading: np.
     ray_slope = (scale[:, None, None] * np.eye(3)
                  + p[:, :, None] * strength_scale_gradient(p, scale, fc, params.surface,
                                                            capped)[:, None, :])
-    compression, tension = (p < 0.0) & ~nil, (p > 0.0) & ~nil
+    compression = (p < 0.0) & ~nil  # the rest: tension (zero components are not active)
     equal = params.compression_tension_rule == "equal"
     rule = np.where(compression, -fc if equal else np.minimum(on_ray, -fc),
                     np.maximum(on_ray, ft))
