@@ -47,11 +47,17 @@ FIRST_INVERSE_STEP = 1.0
 LARGEST_INVERSE_STEP = 1e4
 """A sub-step that fails with dampers this stiff ends the drop (failed)."""
 FAST, SLOW = 4, 10
-"""Sub-steps converged within FAST iterations halve 1/dt; beyond SLOW they double it."""
+"""Sub-steps converged within FAST iterations halve 1/dt (not below SMALLEST_INVERSE_STEP);
+beyond SLOW they double it."""
 CHECK_AT = 10.0
 """A static Newton step is tried once the damper force is within this multiple of the load
-tolerance (then at most every CHECK_EVERY sub-steps)."""
-CHECK_EVERY = 20
+tolerance (then at most every CHECK_EVERY sub-steps), with at most CHECK_ITERATIONS: it
+starts next to an equilibrium, and where it cycles the sub-steps go on."""
+CHECK_EVERY = 5
+CHECK_ITERATIONS = 10
+SUBSTEP_ITERATIONS = 20
+"""A sub-step not converged in this many iterations (or the deck's limit, if lower) is
+retried with other dampers."""
 SUBSTEP_TOLERANCE = 10.0
 """The sub-steps are the drop's path, not results: each converges to this multiple of the
 deck's tolerances; the state the drop ends at meets the deck's own."""
@@ -114,7 +120,9 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
     origin = state.u.copy()
     moving = _moving_origin(problem, state, step, last_increment)  # after a runaway
     loose = replace(settings, tolerance_load=SUBSTEP_TOLERANCE * settings.tolerance_load,
-                    tolerance_displacement=SUBSTEP_TOLERANCE * settings.tolerance_displacement)
+                    tolerance_displacement=SUBSTEP_TOLERANCE * settings.tolerance_displacement,
+                    max_iterations=min(settings.max_iterations, SUBSTEP_ITERATIONS))
+    check = replace(settings, max_iterations=min(settings.max_iterations, CHECK_ITERATIONS))
     weakening = False  # retrying a failed sub-step with weaker dampers
     for k in range(SUBSTEPS):
         dampers = Dampers(diagonal, inverse_step, origin)
@@ -161,14 +169,14 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
         if static <= CHECK_AT * settings.tolerance_load and k >= next_check:
             next_check = k + CHECK_EVERY
             try:
-                final = newton_increment(problem, settings, sub, control, preload)
+                final = newton_increment(problem, check, sub, control, preload)
             except (StepFailed, ConvergenceError) as exc:
                 c.rollback()
                 log.debug("drop: static step at sub-step %d failed (%s)", k, exc)
             else:
                 return _ended(final, iterations + final.iterations, k, state), inverse_step
         if inc.iterations <= FAST:
-            inverse_step *= 0.5
+            inverse_step = max(0.5 * inverse_step, SMALLEST_INVERSE_STEP)
         elif inc.iterations > SLOW:
             inverse_step = min(2.0 * inverse_step, LARGEST_INVERSE_STEP)
     raise StepFailed(f"drop at a fixed deflection: no equilibrium after {SUBSTEPS} sub-steps",
