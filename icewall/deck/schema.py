@@ -259,6 +259,13 @@ class Control:
                               exclusive_minimum=0.0)
     target: float = option(40.0, doc="final control displacement (downward)", unit="mm",
                            exclusive_minimum=0.0)
+    drop_held: str = option(
+        "deflection", doc="scheme newton: what a drop past a snap-back holds while the load "
+        "falls, as the test's loading system does: deflection (the control deflection, eq. "
+        "3.48) or stroke (the load-weighted mean deflection under the patches, sum P_i u_i / "
+        "sum P_i: the stroke of a loading head that drives the patches through a distribution "
+        "beam, as in the TF tests, thesis 4.2: 'Stroke control was used')",
+        choices=("deflection", "stroke"))
 
 
 @dataclass(frozen=True, kw_only=True)

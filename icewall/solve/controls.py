@@ -7,6 +7,8 @@ linearised constraint gives dP = -(phi + g.q2) / (g.q1 + h). Load control has no
 (dP = 0).
 
 - `DisplacementControl` (thesis 3.5): the control deflection -u[c] reaches its target.
+- `StrokeControl`: the load-weighted mean deflection under the loads, R.u / sum |R|, reaches
+  its target (the stroke of a loading head driving the loads through a distribution beam).
 - `DissipationControl` (Gutierrez 2004; Verhoosel, Remmers & Gutierrez 2009, eq. 19): the
   energy released in the increment, G = 1/2 (f0.du - dP R.u0) with f0 = P0 R + F_pre the
   external force at its start, equals tau > 0. It follows the equilibrium path through the
@@ -37,11 +39,40 @@ class DisplacementControl:
     equation: int
     target: float
 
+    def measure(self, u: np.ndarray) -> float:
+        """The controlled deflection of displacements u (linear in u)."""
+        return -float(u[self.equation])
+
     def residual(self, u: np.ndarray, P: float) -> float:
         return -float(u[self.equation]) - self.target
 
     def correction(self, u: np.ndarray, P: float, q1: np.ndarray, q2: np.ndarray) -> float:
         return _correction(self.residual(u, P), -q1[self.equation], -q2[self.equation], 0.0)
+
+
+@dataclass(frozen=True)
+class StrokeControl:
+    """stroke = w.u = target, w = R / sum |R| (R the reference load on the free equations): the
+    mean deflection under the loads weighted by them, whose product with P sum |R| is the
+    external work of the jack load."""
+
+    weights: np.ndarray
+    target: float
+
+    @classmethod
+    def of_load(cls, reference: np.ndarray, target: float = 0.0) -> StrokeControl:
+        return cls(reference / float(np.abs(reference).sum()), target)
+
+    def measure(self, u: np.ndarray) -> float:
+        """The stroke of displacements u (linear in u)."""
+        return float(self.weights @ u)
+
+    def residual(self, u: np.ndarray, P: float) -> float:
+        return self.measure(u) - self.target
+
+    def correction(self, u: np.ndarray, P: float, q1: np.ndarray, q2: np.ndarray) -> float:
+        return _correction(self.residual(u, P), float(self.weights @ q1),
+                           float(self.weights @ q2), 0.0)
 
 
 @dataclass(frozen=True)

@@ -116,9 +116,9 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
     diagonal = floored_diagonal(problem.structure.stiffness(evaluation).diagonal())
     sub, iterations, next_check = state, 0, 0
     reference = float(np.linalg.norm(c.restrict(problem.reference_load)))
-    step = abs(control.target + float(state.u[problem.control_equation]))
+    step = abs(control.target - control.measure(state.u))
     origin = state.u.copy()
-    moving = _moving_origin(problem, state, step, last_increment)  # after a runaway
+    moving = _moving_origin(control, state, step, last_increment)  # after a runaway
     loose = replace(settings, tolerance_load=SUBSTEP_TOLERANCE * settings.tolerance_load,
                     tolerance_displacement=SUBSTEP_TOLERANCE * settings.tolerance_displacement,
                     max_iterations=min(settings.max_iterations, SUBSTEP_ITERATIONS))
@@ -183,13 +183,13 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
                      "non-convergence")
 
 
-def _moving_origin(problem: Problem, state: PathState, step: float,
+def _moving_origin(control, state: PathState, step: float,
                    last_increment: np.ndarray | None) -> np.ndarray | None:
-    """The state moved along the last increment by `step` of deflection (None without one
-    that moved the deflection)."""
+    """The state moved along the last increment by `step` of the held deflection (None
+    without one that moved it)."""
     if last_increment is None:
         return None
-    moved = -float(last_increment[problem.control_equation])
+    moved = control.measure(last_increment)
     if not moved > 0.0:
         return None
     return state.u + (step / moved) * last_increment

@@ -39,6 +39,7 @@ from icewall.solve.controls import (
     DissipationControl,
     LoadControl,
     OpeningControl,
+    StrokeControl,
     largest_principal,
 )
 from icewall.solve.drop import FIRST_INVERSE_STEP, drop_step
@@ -169,6 +170,11 @@ class _Mode:
             return (path.snap_back_control(self.release),
                     f"control {current:.4g} (snap-back control, step {self.release:.3g})")
         step = self.size if self.name == "displacement" else steps.smallest
+        if self.name == "drop" and settings.drop_held == "stroke":
+            stroke = StrokeControl.of_load(path.R)
+            stroke = replace(stroke, target=stroke.measure(path.state.u) + step)
+            return stroke, (f"control {current:.4g}, stroke {stroke.target:.4g} (drop at a "
+                            "fixed stroke)")
         goal = min(current + step, settings.target)
         where = f"control {goal:.4g}" + (" (drop at a fixed deflection)"
                                          if self.name == "drop" else "")

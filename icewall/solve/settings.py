@@ -29,6 +29,7 @@ class SolverSettings:
     scheme: str = "secant"  # secant (the thesis' iteration) | newton (solve/path.py)
     target_iterations: int = 6  # Newton: iterations per step the step-size controller aims at
     trace_snap_backs: bool = False  # Newton: trace a snap-back (opening control) before a drop
+    drop_held: str = "deflection"  # Newton: a drop holds the deflection | the stroke
 
 
 def solver_settings(deck: Deck) -> SolverSettings:
@@ -41,7 +42,7 @@ def solver_settings(deck: Deck) -> SolverSettings:
         reset_slip_each_step=deck.materials.interface.reset_slip_each_step,
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
         on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps,
-        scheme=a.scheme, trace_snap_backs=a.trace_snap_backs)
+        scheme=a.scheme, trace_snap_backs=a.trace_snap_backs, drop_held=c.drop_held)
 
 
 def scheme_warnings(deck: Deck) -> list[str]:

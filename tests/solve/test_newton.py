@@ -222,7 +222,8 @@ def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections():
     assert np.all(np.abs(strain[1:]) <= 1e-6 * 0.2 / h)
 
 
-def test_without_tracing_the_snap_back_the_load_drops_at_the_peak_deflection():
+@pytest.mark.parametrize("held", ["deflection", "stroke"])
+def test_without_tracing_the_snap_back_the_load_drops_at_the_peak_deflection(held):
     # The snap-back bar without analysis.trace_snap_backs: past the peak deflection
     # d_p = L f / E = 0.09 mm the softening branch lies at smaller deflections only (it turns
     # back to h eps_f = 0.03 mm), so a stroke-controlled test drops at once to the separated
@@ -230,7 +231,10 @@ def test_without_tracing_the_snap_back_the_load_drops_at_the_peak_deflection():
     # drop is taken by committed viscous sub-steps and must end on that closed form.
     length, h, E, f, eps_f = 1000.0, 100.0, 30000.0, 0.9 * 3.0, 0.0003
     problem, initial = newton_bar(length, 10, failure_strain=eps_f)
-    chosen = replace(newton_settings(0.2, 0.02, cuts=3, trace=False), on_snap_back="continue")
+    # (held: the drop holds the control deflection, or the stroke under the load, here the
+    # same displacement of the loaded end)
+    chosen = replace(newton_settings(0.2, 0.02, cuts=3, trace=False), on_snap_back="continue",
+                     drop_held=held)
     steps = list(follow_path(problem, chosen, initial))
     d = np.array([inc.control_displacement for inc, _ in steps])
     P = np.array([inc.load_factor for inc, _ in steps])
@@ -269,3 +273,23 @@ def test_on_snap_back_stop_stops_where_the_drop_would_be_taken():
         for inc, _ in follow_path(problem, newton_settings(0.2, 0.02, cuts=3), initial):
             steps.append(inc)
     assert steps and max(inc.control_displacement for inc in steps) < 0.1
+
+
+def test_stroke_control_holds_the_load_weighted_mean_deflection():
+    from icewall.solve.controls import StrokeControl
+
+    # two springs under loads in the ratio 1 : 3 (downward, negative): the stroke is the mean
+    # deflection under them weighted by the loads, and one bordered Newton step of the linear
+    # system K u = P R reaches its target exactly
+    K = np.diag([100.0, 300.0])
+    R = np.array([-1.0, -3.0])
+    control = StrokeControl.of_load(R, target=0.5)
+    assert control.measure(np.array([-1.0, -1.0])) == pytest.approx(1.0)
+    assert control.measure(np.array([-2.0, 0.0])) == pytest.approx(0.5)
+    u, P = np.zeros(2), 0.0
+    q1 = np.linalg.solve(K, R)
+    q2 = np.linalg.solve(K, P * R - K @ u)
+    dP = control.correction(u, P, q1, q2)
+    u = u + dP * q1 + q2
+    assert control.residual(u, P + dP) == pytest.approx(0.0, abs=1e-14)
+    assert (P + dP) == pytest.approx(0.5 / (0.25 * 0.01 + 0.75 * 0.01))
