@@ -50,11 +50,15 @@ def scheme_warnings(deck: Deck) -> list[str]:
     if deck.analysis.scheme != "newton" or deck.analysis.solver == "linear":
         return []
     warnings = []
-    if deck.materials.concrete.compression_tension_rule == "equal":
-        warnings.append("analysis.scheme newton with materials.concrete.compression_tension_rule "
-                        "equal: rule (b) makes the compressive strength jump where a principal "
-                        "stress changes sign, and Newton need not converge there "
-                        "(docs/solver.md, item 7); floor is the errata's continuous reading")
+    concrete = deck.materials.concrete
+    if concrete.mode_rule_band == 0.0:
+        worse = (" (compression_tension_rule equal: also the confined compressive strength)"
+                 if concrete.compression_tension_rule == "equal" else "")
+        warnings.append("analysis.scheme newton with materials.concrete.mode_rule_band 0: the "
+                        "3.2.5 mode rules make the concrete strengths jump where a principal "
+                        f"stress changes sign{worse}, and Newton need not converge next to such "
+                        "a point (docs/solver.md, items 7, 10 and 18); mode_rule_band 0.1 "
+                        "blends them over a band of 0.1 f't")
     interface = deck.materials.interface
     preload = deck.loads.preload
     if (preload is not None and preload.axial_force > 0.0 and interface.model == "gap"

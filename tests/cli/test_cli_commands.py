@@ -130,20 +130,22 @@ def test_check_warns_when_the_newton_scheme_meets_a_tension_preload_without_fixe
                  "materials.interface.fixed_points_per_core=1") == []
 
 
-def test_check_warns_when_the_newton_scheme_meets_the_discontinuous_rule_b():
-    """`icewall check` says, in one line, that Newton with rule (b) read `equal` need not
-    converge (docs/solver.md item 7); with `floor`, or with the secant scheme, it says
-    nothing of it."""
+def test_check_warns_when_the_newton_scheme_meets_the_sharp_mode_rules():
+    """`icewall check` says, in one line, that Newton with the sharp mode rules of 3.2.5
+    (mode_rule_band 0) need not converge (docs/solver.md items 7, 10, 18), and more under
+    rule (b) read `equal`; with a band, or with the secant scheme, it says nothing of it."""
     from pathlib import Path
 
     deck = str(Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml")
     runner = CliRunner()
-    newton = runner.invoke(main, ["check", deck, "--set", "analysis.scheme=newton", "--set",
-                                  "materials.concrete.compression_tension_rule=equal"])
-    assert newton.exit_code == 0
-    lines = [line for line in newton.output.splitlines() if "compression_tension_rule" in line]
-    assert len(lines) == 1 and lines[0].startswith("warning: ") and "floor" in lines[0]
+    for rule in ("equal", "floor"):
+        newton = runner.invoke(main, ["check", deck, "--set", "analysis.scheme=newton", "--set",
+                                      f"materials.concrete.compression_tension_rule={rule}"])
+        assert newton.exit_code == 0
+        lines = [line for line in newton.output.splitlines() if "mode_rule_band" in line]
+        assert len(lines) == 1 and lines[0].startswith("warning: ")
+        assert ("confined" in lines[0]) == (rule == "equal")
     for extra in (["--set", "analysis.scheme=newton", "--set",
-                   "materials.concrete.compression_tension_rule=floor"], []):
+                   "materials.concrete.mode_rule_band=0.1"], []):
         quiet = runner.invoke(main, ["check", deck, *extra])
-        assert quiet.exit_code == 0 and "compression_tension_rule" not in quiet.output
+        assert quiet.exit_code == 0 and "mode_rule_band" not in quiet.output
