@@ -145,6 +145,9 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         forensics["gap_flips"].append(int(flips))
         new_flags = problem.point_flags(trial.evaluation.states)
         forensics["gauss_flag_changes"].append(_count_changes(flags, new_flags))
+        if log.isEnabledFor(logging.DEBUG) and forensics["gauss_flag_changes"][-1]:
+            log.debug("  flag changes per column of each group (solve.nonlinear.point_flags): "
+                      "%s", _changes_per_column(flags, new_flags))
         flags = new_flags
         # the gap forces after the pair states were updated
         trial.unbalance = trial.structural - c.restrict(c.constraint_force())
@@ -192,6 +195,12 @@ def _count_changes(before, after) -> int:
     """Gauss points whose crack/crush/softening/axis flags differ between two iterates."""
     return int(sum(np.count_nonzero(np.any(a != b, axis=1))
                    for a, b in zip(before, after, strict=True) if a is not None))
+
+
+def _changes_per_column(before, after) -> list[list[int]]:
+    """Per group, how many points changed each flag column (-vv forensics)."""
+    return [np.count_nonzero(a != b, axis=0).tolist()
+            for a, b in zip(before, after, strict=True) if a is not None]
 
 
 def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
