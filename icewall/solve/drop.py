@@ -65,8 +65,14 @@ SMALLEST_INVERSE_STEP = 1e-4
 """Once a sub-step has failed at LARGEST_INVERSE_STEP (frozen dampers do not get a point across
 a jump of its law: docs/solver.md items 7 and 10), it is retried with dampers 4x weaker each
 time, from FIRST_INVERSE_STEP / 4 down to this."""
-SUBSTEPS = 2000
+SUBSTEPS = 20000
 """Sub-steps of one drop before it counts as failed."""
+PROGRESS_WINDOW = 500
+"""A drop whose last PROGRESS_WINDOW sub-steps neither lowered the static unbalance below
+PROGRESS_UNBALANCE of its best before them nor moved the load factor by PROGRESS_LOAD of itself
+has stalled: it fails. (A large drop, CF-4's from 615 to 230 kN at 9.75 mm, takes thousands of
+sub-steps and progresses all along.)"""
+PROGRESS_UNBALANCE, PROGRESS_LOAD = 0.9, 1e-3
 RUNAWAY = 100.0
 """A sub-step whose jack loads exceed this multiple of the largest external force system so
 far (eq. 4.5's reference), or of the dampers' force when the whole wall moves by the drop's
@@ -103,7 +109,7 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
     """Take the step to `control`'s deflection through committed viscous sub-steps; return the
     equilibrium it ends at (its iterations: all sub-steps') and the 1/dt to start the next
     drop with. StepFailed when a sub-step fails at every 1/dt, the load runs away or no
-    equilibrium is reached in SUBSTEPS.
+    equilibrium is reached in SUBSTEPS or a window of them makes no progress.
 
     The first sub-step moves the control deflection against the dampers. Where the jack loads
     move the control point little through K_t + D / dt (TF-1: jacks away from midspan, the
@@ -124,7 +130,12 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
                     max_iterations=min(settings.max_iterations, SUBSTEP_ITERATIONS))
     check = replace(settings, max_iterations=min(settings.max_iterations, CHECK_ITERATIONS))
     weakening = False  # retrying a failed sub-step with weaker dampers
+    progress = _Progress(state.load_factor)
     for k in range(SUBSTEPS):
+        if k and k % PROGRESS_WINDOW == 0 and not progress.made(sub.load_factor):
+            raise StepFailed(f"drop at a fixed deflection: no progress in the {PROGRESS_WINDOW} "
+                             f"sub-steps to {k} (static load norm {progress.best:.3g})",
+                             "non-convergence")
         dampers = Dampers(diagonal, inverse_step, origin)
         try:
             inc = newton_increment(problem, loose, sub, control, preload, dampers=dampers)
@@ -158,6 +169,7 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
         sub = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
                         inc.preload_factor, state.load_scale)
         static = static_load_norm(problem, inc, state.load_scale)
+        progress.window = min(progress.window, static)
         moved = float(np.linalg.norm(inc.u - dampers.origin)) / max(
             float(np.linalg.norm(inc.u)), 1e-30)
         log.debug("drop sub-step %d: 1/dt %.3g, %d iterations, load factor %.6g, static load "
@@ -181,6 +193,21 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
             inverse_step = min(2.0 * inverse_step, LARGEST_INVERSE_STEP)
     raise StepFailed(f"drop at a fixed deflection: no equilibrium after {SUBSTEPS} sub-steps",
                      "non-convergence")
+
+
+class _Progress:
+    """The static unbalance and load factor of a drop over its windows of sub-steps."""
+
+    def __init__(self, load_factor: float) -> None:
+        self.best, self.window, self.load_factor = float("inf"), float("inf"), load_factor
+
+    def made(self, load_factor: float) -> bool:
+        """Whether the window just ended made progress; starts the next one."""
+        made = (self.window < PROGRESS_UNBALANCE * self.best
+                or abs(load_factor - self.load_factor) > PROGRESS_LOAD * abs(self.load_factor))
+        self.best, self.window = min(self.best, self.window), float("inf")
+        self.load_factor = load_factor
+        return made
 
 
 def _moving_origin(control, state: PathState, step: float,
