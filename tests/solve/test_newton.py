@@ -293,3 +293,17 @@ def test_stroke_control_holds_the_load_weighted_mean_deflection():
     u = u + dP * q1 + q2
     assert control.residual(u, P + dP) == pytest.approx(0.0, abs=1e-14)
     assert (P + dP) == pytest.approx(0.5 / (0.25 * 0.01 + 0.75 * 0.01))
+
+
+def test_a_drop_window_without_progress_is_a_stall():
+    from icewall.solve.drop import _Progress
+
+    progress = _Progress(100.0)
+    progress.window = 1e-2
+    assert progress.made(100.0)  # the first window: nothing to compare with
+    progress.window = 0.95e-2  # 5 % lower unbalance, the load factor still: stalled
+    assert not progress.made(100.0 + 1e-3)
+    progress.window = 1e-2
+    assert progress.made(99.0)  # the load falls by 1 %: progress
+    progress.window = 0.5e-2
+    assert progress.made(99.0)  # the unbalance halves: progress
