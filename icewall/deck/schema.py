@@ -264,7 +264,7 @@ class Control:
         "falls, as the test's loading system does: deflection (the control deflection, eq. "
         "3.48) or stroke (the load-weighted mean deflection under the patches, sum P_i u_i / "
         "sum P_i: the stroke of a loading head that drives the patches through a distribution "
-        "beam, as in the TF tests, thesis 4.2: 'Stroke control was used')",
+        "beam, as in the TF tests, thesis 4.2.2: 'Stroke control was used')",
         choices=("deflection", "stroke"))
 
 

@@ -70,7 +70,7 @@ SUBSTEPS = 20000
 PROGRESS_WINDOW = 500
 """A drop whose last PROGRESS_WINDOW sub-steps neither lowered the static unbalance below
 PROGRESS_UNBALANCE of its best before them nor moved the load factor by PROGRESS_LOAD of itself
-has stalled: it fails. (A large drop, CF-4's from 612 to 127 kN at 9.75 mm, took 3 535
+has stalled: it fails. (A large drop, CF-4's jack load from 612 to 127 kN at 9.75 mm, took 3 535
 sub-steps and progressed all along.)"""
 PROGRESS_UNBALANCE, PROGRESS_LOAD = 0.9, 1e-3
 RUNAWAY = 100.0
