@@ -144,7 +144,7 @@ def _strength_jacobian(trial: np.ndarray, strength: np.ndarray, loading: np.ndar
     largest = np.abs(trial).max(axis=1, keepdims=True)
     zero = (np.abs(trial) <= 1e-6 * largest) | (largest <= 1e-12 * params.fc)
     if params.mode_rule_band > 0.0:
-        return _blended_strength_jacobian(trial, zero, loading, params)
+        return _blended_strength_jacobian(trial, strength, zero, loading, params)
     tension, compression = (trial > 0.0) & ~zero, (trial < 0.0) & ~zero
     any_tension = tension.any(axis=1, keepdims=True)
     any_compression = compression.any(axis=1, keepdims=True)
@@ -166,33 +166,42 @@ def _strength_jacobian(trial: np.ndarray, strength: np.ndarray, loading: np.ndar
     return derivative * follows[:, :, None]
 
 
-def _blended_strength_jacobian(trial: np.ndarray, zero: np.ndarray, loading: np.ndarray,
-                               params: Any) -> np.ndarray:
+def _blended_strength_jacobian(trial: np.ndarray, strength: np.ndarray, zero: np.ndarray,
+                               loading: np.ndarray, params: Any) -> np.ndarray:
     """`_strength_jacobian` with the mode rules blended over a band (`mode_rule_weights`):
     sigma_ic = (1 - w) s sigma_i + w rule_i, so d sigma_ic = (1 - w + w [rule_i follows the
     ray]) d(s sigma_i) + (rule_i - s sigma_i) dw, w a clipped linear function of the largest
-    tension (rule (b)) or compression (rule (c)). The scale s is solved again (the blended
-    strengths are not on the ray)."""
+    tension (rule (b)) or compression (rule (c)). The scale s is read back from a component
+    whose sigma_ic is on the ray (weight 0, or weight 1 with the rule following the ray), and
+    solved again only for rows without one."""
     fc, ft, band = params.fc, params.ft, params.mode_rule_band * params.ft
     active = loading & ~zero
     derivative = np.zeros(trial.shape + (3,))
     rows = np.nonzero(active.any(axis=1))[0]
     if rows.size == 0:
         return derivative
-    p, nil = trial[rows], zero[rows]
-    scale, capped = strength_scale(p, fc, params.surface, max_scale=MAX_SCALE,
-                                   return_capped=True)
+    p, nil, given = trial[rows], zero[rows], strength[rows]
+    compression = (p < 0.0) & ~nil  # the rest: tension (zero components are not active)
+    in_tension, in_compression = mode_rule_weights(p, nil, params)
+    weight = np.where(compression, in_tension, in_compression)
+    equal = params.compression_tension_rule == "equal"
+    ray_followed = np.where(compression, False if equal else given < -fc, given > ft)
+    # (only a loading direction's sigma_ic is the update's for this trial stress)
+    readable = active[rows] & ((weight == 0.0) | ((weight == 1.0) & ray_followed))
+    scale = np.empty(p.shape[0])
+    has = readable.any(axis=1)
+    first = np.argmax(readable, axis=1)[has]
+    scale[has] = given[has, first] / p[has, first]
+    if not has.all():
+        scale[~has] = strength_scale(p[~has], fc, params.surface, max_scale=MAX_SCALE)
+    capped = scale * np.abs(p).max(axis=1) >= (1.0 - 1e-9) * MAX_SCALE * fc
     on_ray = p * scale[:, None]
     ray_slope = (scale[:, None, None] * np.eye(3)
                  + p[:, :, None] * strength_scale_gradient(p, scale, fc, params.surface,
                                                            capped)[:, None, :])
-    compression = (p < 0.0) & ~nil  # the rest: tension (zero components are not active)
-    equal = params.compression_tension_rule == "equal"
     rule = np.where(compression, -fc if equal else np.minimum(on_ray, -fc),
                     np.maximum(on_ray, ft))
     follows = np.where(compression, False if equal else on_ray < -fc, on_ray > ft)
-    in_tension, in_compression = mode_rule_weights(p, nil, params)
-    weight = np.where(compression, in_tension, in_compression)
     # dw / d sigma_j: at the largest tension (rule (b)) or compression (rule (c)), in the band
     nonzero = np.where(nil, 0.0, p)
     by_tension = np.zeros_like(p)

@@ -62,9 +62,10 @@ SUBSTEP_TOLERANCE = 10.0
 """The sub-steps are the drop's path, not results: each converges to this multiple of the
 deck's tolerances; the state the drop ends at meets the deck's own."""
 SMALLEST_INVERSE_STEP = 1e-4
-"""Once a sub-step has failed at LARGEST_INVERSE_STEP (frozen dampers do not get a point across
-a jump of its law: docs/solver.md items 7 and 10), it is retried with dampers 4x weaker each
-time, from FIRST_INVERSE_STEP / 4 down to this."""
+"""The weakest dampers: quick sub-steps halve 1/dt down to this (the dampers are then negligible
+against the tangent), and once a sub-step has failed at LARGEST_INVERSE_STEP (frozen dampers do
+not get a point across a jump of its law: docs/solver.md items 7 and 10) it is retried with
+dampers 4x weaker each time, from FIRST_INVERSE_STEP / 4 down to this."""
 SUBSTEPS = 20000
 """Sub-steps of one drop before it counts as failed."""
 PROGRESS_WINDOW = 500
@@ -98,7 +99,7 @@ class Dampers:
         """D (u - origin) / dt, the damper force the residual carries."""
         return self.inverse_step * self.diagonal * (u - self.origin)
 
-    def shift(self, tangent: sp.spmatrix | None = None) -> sp.dia_matrix:
+    def shift(self) -> sp.dia_matrix:
         """D / dt, added to the tangent."""
         return sp.diags(self.inverse_step * self.diagonal)
 

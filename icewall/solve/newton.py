@@ -210,7 +210,7 @@ def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
     the control's row."""
     s, c = problem.structure, problem.constraints
     K = s.stiffness(matrix_at)
-    factor = c.factorize(K if dampers is None else K + dampers.shift(K))
+    factor = c.factorize(K if dampers is None else K + dampers.shift())
     rhs_unbalance = c.unbalance_rhs(current.structural, current.u)
     if isinstance(control, LoadControl):
         du, dm = c.split(factor.solve(rhs_unbalance))
