@@ -22,10 +22,10 @@ from icewall.materials.parameters import derive_concrete_parameters
 
 PHASES = {  # (file, function): label; the file tells same-named helpers apart
     ("concrete.py", "update_concrete"): "total update",
-    ("ultimate_surface.py", "equivalent_uniaxial_strengths"): "step 5: sigma_ic (ultimate surface)",
+    ("mode_rules.py", "equivalent_uniaxial_strengths"): "step 5: sigma_ic (ultimate surface)",
     ("ultimate_surface.py", "strength_scale"): "  of which s on the ray (Newton)",
     ("ultimate_surface.py", "_ray_function"): "    of which f, df/dt evaluations",
-    ("ultimate_surface.py", "equivalent_uniaxial_peak_strains"): "step 5: eps_ic",
+    ("mode_rules.py", "equivalent_uniaxial_peak_strains"): "step 5: eps_ic",
     ("concrete.py", "_envelope"): "step 6: envelopes (eqs. 3.9-3.11)",
     ("uniaxial.py", "_envelope"): "  of which uniaxial curves (all calls)",
     ("orthotropic.py", "orthotropic_normal_stiffness"): "steps 3, 7: C_l (eq. 3.2), two calls",

@@ -36,6 +36,10 @@ import numpy as np
 
 from icewall.fem.kinematics import check_formulation
 from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.mode_rules import (
+    equivalent_uniaxial_peak_strains,
+    equivalent_uniaxial_strengths,
+)
 from icewall.materials.orthotropic import (
     compression_poisson_ratio,
     condense_plane_stress,
@@ -46,10 +50,6 @@ from icewall.materials.orthotropic import (
     orthotropic_normal_stiffness,
     principal_strain_angle,
     tension_poisson_ratio,
-)
-from icewall.materials.ultimate_surface import (
-    equivalent_uniaxial_peak_strains,
-    equivalent_uniaxial_strengths,
 )
 from icewall.materials.uniaxial import compression_envelope, tension_envelope
 

@@ -248,7 +248,7 @@ def strength_scales(sb, tb, c, mag, prm):
 
 @jit
 def uniaxial_strengths(W, i, scale, prm):
-    """ultimate_surface.equivalent_uniaxial_strengths of the trial stress of point i (strain_sign
+    """mode_rules.equivalent_uniaxial_strengths of the trial stress of point i (strain_sign
     eps_iu, strength scale `scale`): the §3.2.5 mode rules (errata §3) into W[i, W_STRENGTH]."""
     fc, ft = prm[P_FC], prm[P_FT]
     mag = _max(_max(abs(W[i, W_TRIAL, 0]), abs(W[i, W_TRIAL, 1])), abs(W[i, W_TRIAL, 2]))
@@ -283,7 +283,7 @@ def uniaxial_strengths(W, i, scale, prm):
 
 @jit
 def peak_strain(sigma, prm):
-    """ultimate_surface.equivalent_uniaxial_peak_strains of one signed strength (errata §2.4)."""
+    """mode_rules.equivalent_uniaxial_peak_strains of one signed strength (errata §2.4)."""
     R = abs(sigma) / prm[P_FC]
     if R >= 1.0:
         ratio = 1.0 + prm[P_SLOPE] * (R - 1.0)

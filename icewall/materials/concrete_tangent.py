@@ -61,6 +61,7 @@ from icewall.materials.concrete import (
     update_concrete,
 )
 from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.mode_rules import mode_rule_weights
 from icewall.materials.orthotropic import (
     condense_plane_stress,
     global_strain,
@@ -68,11 +69,7 @@ from icewall.materials.orthotropic import (
     orthotropic_normal_stiffness,
     strain_rotation,
 )
-from icewall.materials.ultimate_surface import (
-    mode_rule_weights,
-    strength_scale,
-    strength_scale_gradient,
-)
+from icewall.materials.ultimate_surface import strength_scale, strength_scale_gradient
 
 RELATIVE_STEP = 1e-6
 """Central-difference step on the principal strains, relative to the point's strain size (at

@@ -1,24 +1,21 @@
-"""Willam-Warnke five-parameter ultimate surface and equivalent-uniaxial strengths/strains.
+"""Willam-Warnke five-parameter ultimate surface and the strength scale on a stress ray.
 
-Thesis §3.2.4-3.2.5 (eqs. 3.12-3.18) with the corrections of errata §1.1; calibration per
+Thesis §3.2.4 (eqs. 3.12-3.18) with the corrections of errata §1.1; calibration per
 errata §2. Conventions: tension positive, principal stresses sigma1 >= sigma2 >= sigma3 (rows
 are sorted here anyway), f'c > 0 a magnitude, units MPa.
 
 Default calibration (errata §2.3, set B through f't = 0.33 sqrt(f'c)): convex and r2/2 < r1 <= r2
 from the apex (sigma_bar ~ +0.04) down to sigma_bar = -2.35 (``sigma_limit``) for f'c = 20-120
-MPa. Its f1 point (sigma_bar = -2.70) lies beyond that limit and is not reproduced.
+MPa. Its f1 point (sigma_bar = -2.70) lies beyond that limit and is not reproduced. The
+equivalent-uniaxial strengths and peak strains of §3.2.5 that use it are in `mode_rules`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
-
-if TYPE_CHECKING:
-    from icewall.materials.parameters import ConcreteParameters
 
 SQ215 = float(np.sqrt(2.0 / 15.0))  # tau_bar / sigma for a uniaxial state
 Coef = tuple[float, float, float]
@@ -306,87 +303,6 @@ def strength_scale(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface
             x, lo, hi, step_old, step = x[keep], lo[keep], hi[keep], step_old[keep], step[keep]
     t_out[rows] = 0.5 * (lo + hi)  # not converged within ``iterations``: bracket midpoint
     return (t_out / mag, ~meets) if return_capped else t_out / mag
-
-
-def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParameters, *,
-                                  strain_sign: ArrayLike | None = None, zero_tol: float = 1e-6,
-                                  max_scale: float = 100.0) -> np.ndarray:
-    """Signed sigma_ic (n,3) (negative = compression), in the columns' own order.
-
-    sigma_ic = s sigma_i on the proportional ray (§3.2.4), then the §3.2.5 mode rules read
-    with signed stresses (errata §3 "Sign convention"): (a) triaxial compression: from the
-    surface; (b) compression-tension: tension from the surface, compression equal to f'c
-    (params.compression_tension_rule "equal") or at least f'c in magnitude ("floor");
-    (c) all-tension: tension at least f't; with ``params.mode_rule_band`` > 0 rules (b) and
-    (c) blend in over a band of the other components' stresses (`mode_rule_weights`).
-    Components with |sigma_i| <= zero_tol
-    max|sigma| (e.g. sigma3 = 0 in plane stress) and all components of a zero state
-    (max|sigma| <= 1e-12 f'c) fall back to the uniaxial values (errata §3, "Using the strength
-    surface"): -f'c where ``strain_sign`` (e.g. sign of eps_iu) or else the stress is negative,
-    +f't otherwise. Mode counts use only the non-fallback components.
-    """
-    p = np.atleast_2d(np.asarray(principal, dtype=float))
-    fc, ft = params.fc, params.ft
-    s = np.asarray(strength_scale(p, fc, params.surface, max_scale=max_scale))
-    sic = s[:, None] * p
-    mag = np.max(np.abs(p), axis=1, keepdims=True)
-    zero = (np.abs(p) <= zero_tol * mag) | (mag <= 1e-12 * fc)
-    hint = p if strain_sign is None else np.broadcast_to(np.asarray(strain_sign, float), p.shape)
-    fallback = np.where(hint < 0.0, -fc, ft)
-    tens, comp = (p > 0.0) & ~zero, (p < 0.0) & ~zero
-    any_t = tens.any(axis=1, keepdims=True)
-    any_c = comp.any(axis=1, keepdims=True)
-    out = sic.copy()
-    # rule (b): "the compressive strength/strain is set equal to the uniaxial strength/strain
-    # ... if the calculated values from the ultimate surfaces are greater": read in magnitudes
-    # a cap, read signed (errata §3) a floor; "equal" applies both, "floor" the errata's
-    rule_b = (np.full_like(sic, -fc) if params.compression_tension_rule == "equal"
-              else np.minimum(sic, -fc))
-    rule_c = np.maximum(sic, ft)
-    if params.mode_rule_band > 0.0:  # the rules blend in over the band (mode_rule_weights)
-        in_tension, in_compression = mode_rule_weights(p, zero, params)
-        out = np.where(comp, (1.0 - in_tension) * sic + in_tension * rule_b, out)
-        out = np.where(tens, (1.0 - in_compression) * sic + in_compression * rule_c, out)
-        return np.where(zero, fallback, out)
-    out = np.where(comp & any_t, rule_b, out)
-    out = np.where(tens & ~any_c, rule_c, out)  # rule (c)
-    return np.where(zero, fallback, out)
-
-
-def mode_rule_weights(principal: np.ndarray, zero: np.ndarray, params: ConcreteParameters
-                      ) -> tuple[np.ndarray, np.ndarray]:
-    """How far rules (b) and (c) of §3.2.5 apply, (n, 1) each, with a band of width
-    b = ``params.mode_rule_band`` f't: rule (b) (a compressive component in a compression-
-    tension state) by min(t / b, 1), t the largest tension; rule (c) (a tensile component in
-    all-tension) by 1 - min(c / b, 1), c the largest compression (zero components count
-    neither). With b = 0 the thesis' sharp rules, whose strengths jump where a principal
-    stress changes sign (docs/solver.md items 7, 10 and 18); the band makes them continuous
-    and leaves every state with no principal stress of the other sign within b unchanged."""
-    band = params.mode_rule_band * params.ft
-    nonzero = np.where(zero, 0.0, principal)
-    tension = np.max(np.maximum(nonzero, 0.0), axis=1, keepdims=True)
-    compression = np.max(np.maximum(-nonzero, 0.0), axis=1, keepdims=True)
-    return (np.clip(tension / band, 0.0, 1.0), 1.0 - np.clip(compression / band, 0.0, 1.0))
-
-
-def equivalent_uniaxial_peak_strains(sigma_ic: ArrayLike, params: ConcreteParameters
-                                     ) -> np.ndarray:
-    """Signed eps_ic (n,3) for the signed strengths sigma_ic (errata §2.4 substitute for the
-    lost Elwi-Murray strain surface).
-
-    Compression, R = |sigma_ic|/f'c: eps_ic/eps_c = 1 + m (R - 1) for R >= 1 (m =
-    ``params.peak_strain_slope`` = 3: 3R - 2) and -1.6R^3 + 2.25R^2 + 0.35R for R < 1
-    (Darwin & Pecknold 1977 as quoted in errata §2.4; not re-verified). Tension:
-    eps_ic = eps_t sigma_ic / f't (linear branch). Finally |eps_ic| >= |sigma_ic|/E0, so that
-    R_E = E0 eps_ic / sigma_ic >= 1 (errata §2.4); where clamped the ascending branch is linear.
-    """
-    sig = np.atleast_2d(np.asarray(sigma_ic, dtype=float))
-    R = np.abs(sig) / params.fc
-    ratio = np.where(R >= 1.0, 1.0 + params.peak_strain_slope * (R - 1.0),
-                     (-1.6 * R + 2.25) * R * R + 0.35 * R)
-    mag = np.where(sig < 0.0, ratio * params.eps_c, sig * params.eps_t / params.ft)
-    mag = np.maximum(mag, np.abs(sig) / params.E0)
-    return np.where(sig < 0.0, -mag, mag)
 
 
 def _radius_slope_in_cos(c: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:

@@ -23,12 +23,10 @@ import icewall.materials.concrete_compiled as compiled  # noqa: E402
 from icewall.deck.load import load_deck  # noqa: E402
 from icewall.materials.concrete import update_concrete  # noqa: E402
 from icewall.materials.concrete_state import ConcreteState  # noqa: E402
+from icewall.materials.mode_rules import equivalent_uniaxial_strengths  # noqa: E402
 from icewall.materials.parameters import derive_concrete_parameters  # noqa: E402
 from icewall.materials.substep import update_concrete_substepped  # noqa: E402
-from icewall.materials.ultimate_surface import (  # noqa: E402
-    equivalent_uniaxial_strengths,
-    strength_scale,
-)
+from icewall.materials.ultimate_surface import strength_scale  # noqa: E402
 from icewall.mesh.build import build_mesh, region_materials  # noqa: E402
 from icewall.model.build import build_model  # noqa: E402
 from icewall.model.materials import (  # noqa: E402

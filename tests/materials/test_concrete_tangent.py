@@ -306,7 +306,7 @@ def test_blended_strengths_slope_matches_differences(stress):
     """d sigma_ic / d trial with the mode rules blended over a band (0.5 f't): states inside
     it (a tension or compression below 1.2 MPa against components of the other sign)."""
     from icewall.materials.concrete_tangent import _strength_jacobian
-    from icewall.materials.ultimate_surface import equivalent_uniaxial_strengths
+    from icewall.materials.mode_rules import equivalent_uniaxial_strengths
 
     trial = np.array([stress])
     loading = np.ones((1, 3), dtype=bool)

@@ -7,8 +7,9 @@ import dataclasses
 
 import numpy as np
 
+from icewall.materials.mode_rules import equivalent_uniaxial_strengths
 from icewall.materials.parameters import derive_concrete_parameters
-from icewall.materials.ultimate_surface import equivalent_uniaxial_strengths, strength_scale
+from icewall.materials.ultimate_surface import strength_scale
 
 FLOOR = derive_concrete_parameters(53.5, 25.0, compression_tension_rule="floor")
 EQUAL = dataclasses.replace(FLOOR, compression_tension_rule="equal")

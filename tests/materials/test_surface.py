@@ -11,6 +11,10 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.optimize import brentq
 
+from icewall.materials.mode_rules import (
+    equivalent_uniaxial_peak_strains,
+    equivalent_uniaxial_strengths,
+)
 from icewall.materials.parameters import derive_concrete_parameters
 from icewall.materials.ultimate_surface import (
     SET_A_ELWI_MURRAY,
@@ -18,8 +22,6 @@ from icewall.materials.ultimate_surface import (
     WillamWarnkeSurface,
     default_surface,
     elwi_murray_refit,
-    equivalent_uniaxial_peak_strains,
-    equivalent_uniaxial_strengths,
     failure_function,
     hydrostatic_points,
     lode_angle,
