@@ -143,6 +143,15 @@ class Concrete:
         "does. 0 = the thesis' sharp rules, under which the strengths jump at a sign change "
         "and the converged (newton) scheme may find no equilibrium next to such a point",
         minimum=0.0, maximum=10.0)
+    post_peak_strength: str = option(
+        "ray", doc="the strength sigma_ic and peak strain eps_ic of a principal direction "
+        "past its peak (cracked in tension, crushed in compression, on the same branch): ray "
+        "= read again on the ray of the trial stress to the 3.2.4 ultimate surface at every "
+        "update, as for a direction before its peak (Fig. 3.12 step 5, errata 1.3); peak = "
+        "kept from where the direction passed its peak, so its softening branch (eq. 3.11, "
+        "whose area sigma_ic / k is the energy of eqs. 3.26-3.30) no longer moves with the "
+        "other stresses and its stress is continuous where it turns from unloading to "
+        "loading (NumPy kernel only)", choices=("ray", "peak"))
     trial_stress: str = option(
         "corotational", doc="trial stress of Fig. 3.12 step 3: corotational = committed "
         "principal stresses carried with the rotating axes plus C dEps between the committed "

@@ -13,7 +13,8 @@ Fig. 3.12 from the committed state to the given total strain:
      and a zero increment returns the committed stress; "total" is C_l eps_l (not consistent
      once nu has grown, see tests/materials/test_concrete_solver_options.py).
 4.   eps_iu = sigma_lt,i / E_i with the secant E_i (errata 1.1 on eq. 3.8: step 4, not 3.8).
-5.   sigma_ic, eps_ic from the ultimate surfaces on the ray of the trial stress (errata 1.3).
+5.   sigma_ic, eps_ic from the ultimate surfaces on the ray of the trial stress (errata 1.3);
+     with `post_peak_strength: peak` a direction past its peak keeps its committed ones.
 6.   Per direction: loading (|eps_iu| beyond its maximum) follows eqs. 3.9-3.11 and updates the
      secant E_i, nu_i (3.19-3.20); unloading keeps E_i, nu_i (Fig. 3.13). A direction past
      its peak on the other sign's branch (a closing crack, a crushed direction in tension)
@@ -115,6 +116,16 @@ def loading_directions(trial: np.ndarray, eps_u: np.ndarray, state: ConcreteStat
     return loading, sign_change
 
 
+def past_peak(eps_u: np.ndarray, cracked: np.ndarray, crushed: np.ndarray,
+              sign_change: np.ndarray, params: Any) -> np.ndarray:
+    """(n, 3) bool: directions that keep their committed sigma_ic, eps_ic (deck
+    `post_peak_strength: peak`): past their peak on the branch they are on (cracked in
+    tension, crushed in compression) without a change of sign. All False under "ray"."""
+    if getattr(params, "post_peak_strength", "ray") != "peak":
+        return np.zeros(eps_u.shape, dtype=bool)
+    return ~sign_change & np.where(eps_u > 0.0, cracked, crushed)
+
+
 def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
                     trial_stress: str = "incremental", frozen: np.ndarray | None = None,
                     with_moduli: bool = True
@@ -188,6 +199,11 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         strength[loads] = equivalent_uniaxial_strengths(trial[loads], params,
                                                         strain_sign=eps_u[loads])
         peak_strain[loads] = equivalent_uniaxial_peak_strains(strength[loads], params)
+        kept = past_peak(eps_u[loads], state.cracked[loads], state.crushed[loads],
+                         sign_change[loads], params)
+        strength[loads] = np.where(kept, state.uniaxial_strength[loads], strength[loads])
+        peak_strain[loads] = np.where(kept, state.uniaxial_peak_strain[loads],
+                                      peak_strain[loads])
         envelope_stress[loads], envelope_secant[loads] = _envelope(
             eps_u[loads], strength[loads], peak_strain[loads], params, loads)
     # on the same branch the secant never grows (damage is irreversible; the thesis is silent):

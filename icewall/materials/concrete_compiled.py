@@ -89,7 +89,7 @@ def parameter_tuple(params: Any) -> tuple[float, ...]:
               params.compression_tension_rule == "equal", *surface.a, *surface.b,
               surface.sigma_limit, concrete.LOADING_TOLERANCE, uniaxial.SECANT_FLOOR,
               orthotropic.PHI_MIN, orthotropic.ANGLE_TOLERANCE,
-              params.mode_rule_band * params.ft]
+              params.mode_rule_band * params.ft, params.post_peak_strength == "peak"]
     return tuple(float(v) for v in values)
 
 
@@ -136,7 +136,7 @@ def compiled_update(strain: np.ndarray, state: ConcreteState, params: Any, formu
                        trial_stress == "corotational", formulation == "plane_strain", prm, k_t,
                        k_c, out, work, flags, exponent)
     kernels.ray_pass(S, prm, work, flags, np.exp(-exponent), lode_x, lode_y)
-    kernels.strength_pass(prm, k_t, k_c, work, flags, np.arctan2(lode_y, lode_x), exponent)
+    kernels.strength_pass(S, prm, k_t, k_c, work, flags, np.arctan2(lode_y, lode_x), exponent)
     kernels.finish_pass(S, mask, frozen is not None, prm, work, flags, np.exp(-exponent), out)
     return out[1], ConcreteState(*out)
 

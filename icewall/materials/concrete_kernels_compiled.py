@@ -28,7 +28,8 @@ inline = njit(cache=True, error_model="numpy", inline="always")  # lets loops ve
 # cached kernel would keep the values of constants imported from other files
 (P_E0, P_NU0, P_NU_MAX, P_FC, P_FT, P_EPS_C, P_EPS_T, P_SLOPE, P_RULE_EQUAL,
  P_A0, P_A1, P_A2, P_B0, P_B1, P_B2, P_LIMIT,
- P_LOADING_TOLERANCE, P_SECANT_FLOOR, P_PHI_MIN, P_ANGLE_TOLERANCE, P_MODE_BAND) = range(21)
+ P_LOADING_TOLERANCE, P_SECANT_FLOOR, P_PHI_MIN, P_ANGLE_TOLERANCE, P_MODE_BAND,
+ P_KEEP_PEAK) = range(22)
 # rows of the (n, N_WORK, 3) work array carried between the passes: per direction, then
 # W_RAY: sigma_bar, tau_bar, max |p| of the unit ray; W_AXES: cos, sin of beta
 W_TRIAL, W_EPS_U, W_STRENGTH, W_PEAK, W_LOCAL, W_RAY, W_AXES = range(7)
@@ -377,10 +378,11 @@ def ray_pass(S, prm, W, B, decayed, lode_x, lode_y):
 
 
 @jit
-def strength_pass(prm, k_t, k_c, W, B, lode_atan, A):
+def strength_pass(S, prm, k_t, k_c, W, B, lode_atan, A):
     """Step 5 (errata 1.3) where a direction loads: sigma_ic on the ray (theta from lode_atan =
-    arctan2(lode_y, lode_x)) with the mode rules, eps_ic, the exponents of their envelopes
-    into A (else 0)."""
+    arctan2(lode_y, lode_x)) with the mode rules, eps_ic (the committed ones past the peak
+    where P_KEEP_PEAK: concrete.past_peak), the exponents of their envelopes into A (else 0)."""
+    s_strength, s_peak, s_cracked, s_crushed = S[8], S[9], S[10], S[11]
     n = W.shape[0]
     rows, m = np.empty(n, np.int64), 0
     for i in range(n):
@@ -399,6 +401,9 @@ def strength_pass(prm, k_t, k_c, W, B, lode_atan, A):
         for k in range(3):
             eps_u = W[i, W_EPS_U, k]
             W[i, W_PEAK, k] = peak_strain(W[i, W_STRENGTH, k], prm)
+            if prm[P_KEEP_PEAK] != 0.0 and not B[i, B_SIGN_CHANGE, k] and (
+                    s_cracked[i, k] if eps_u > 0.0 else s_crushed[i, k]):
+                W[i, W_STRENGTH, k], W[i, W_PEAK, k] = s_strength[i, k], s_peak[i, k]
             A[i, k] = decay_exponent(eps_u, W[i, W_PEAK, k], k_t[i] if eps_u > 0.0 else k_c[i])
 
 

@@ -57,6 +57,7 @@ from icewall.materials.concrete import (
     _envelope,
     _point_column,
     loading_directions,
+    past_peak,
     take_parameters,
     update_concrete,
 )
@@ -280,7 +281,10 @@ def principal_moduli(trial_state: ConcreteState, state: ConcreteState, params: A
     if rows.size:  # a loading direction's sigma_ic, eps_ic are in the trial state
         strength = trial_state.uniaxial_strength[rows]
         peak_strain = trial_state.uniaxial_peak_strain[rows]
-        strength_slope = _strength_jacobian(trial[rows], strength, loading[rows], params)
+        kept = past_peak(eps_u[rows], state.cracked[rows], state.crushed[rows],
+                         sign_change[rows], params)  # their sigma_ic is a constant
+        strength_slope = _strength_jacobian(trial[rows], strength, loading[rows] & ~kept,
+                                            params)
         _, secant = _envelope(eps_u[rows], strength, peak_strain, params, rows)
         heal = ~sign_change[rows] & (secant > E[rows])  # loads along its secant: s = trial
         on_envelope = loading[rows] & ~heal

@@ -88,6 +88,9 @@ class ConcreteParameters:
     # width of the band of a principal stress, as a fraction of f't, over which rules (b) and
     # (c) of §3.2.5 blend in as it changes sign (0: the thesis' sharp rules, a jump)
     mode_rule_band: float = 0.0
+    # sigma_ic, eps_ic of a direction past its peak: "ray" = read again on the trial stress's
+    # ray at every update (errata 1.3, step 5); "peak" = kept from where it passed its peak
+    post_peak_strength: str = "ray"
 
     def __post_init__(self) -> None:
         for name in ("fc", "E0", "ft", "eps_c", "eps_t", "Gf", "G_cr", "h_c", "k_t", "k_c"):
@@ -102,6 +105,9 @@ class ConcreteParameters:
             raise ValueError("compression_tension_rule must be 'equal' or 'floor'")
         if not (math.isfinite(self.mode_rule_band) and 0.0 <= self.mode_rule_band <= 10.0):
             raise ValueError(f"mode_rule_band must be in [0, 10], got {self.mode_rule_band}")
+        if self.post_peak_strength not in ("ray", "peak"):
+            raise ValueError("post_peak_strength must be 'ray' or 'peak', got "
+                             f"{self.post_peak_strength!r}")
 
     @property
     def snap_back_tension(self) -> bool:
@@ -117,7 +123,7 @@ class ConcreteParameters:
 
 _DEFAULTS = ("E0", "ft", "eps_c", "eps_t", "nu0", "Gf", "alpha", "G_cr", "k_t", "k_c",
              "nu_max", "surface", "peak_strain_slope", "compression_tension_rule",
-             "mode_rule_band")
+             "mode_rule_band", "post_peak_strength")
 _SURFACE_KEYS = ("fcb_ratio", "f1", "f2")
 
 
@@ -175,5 +181,6 @@ def derive_concrete_parameters(fc: float, h_c: float, **overrides: object) -> Co
         nu_max=float(get("nu_max", 0.49)), surface=surface,  # type: ignore[arg-type]
         peak_strain_slope=float(get("peak_strain_slope", 3.0)),
         compression_tension_rule=str(get("compression_tension_rule", "equal")),
-        mode_rule_band=float(get("mode_rule_band", 0.0)))
+        mode_rule_band=float(get("mode_rule_band", 0.0)),
+        post_peak_strength=str(get("post_peak_strength", "ray")))
 

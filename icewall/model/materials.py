@@ -73,7 +73,8 @@ def concrete_parameters(deck: Deck, h_c: float) -> ConcreteParameters:
     overrides: dict[str, Any] = {"eps_c": c.eps_c, "nu0": c.nu, "Gf": c.Gf,
                                  "fcb_ratio": c.surface.biaxial_ratio,
                                  "compression_tension_rule": c.compression_tension_rule,
-                                 "mode_rule_band": c.mode_rule_band}
+                                 "mode_rule_band": c.mode_rule_band,
+                                 "post_peak_strength": c.post_peak_strength}
     for deck_key, key in (("E", "E0"), ("ft", "ft"), ("alpha", "alpha"), ("k_t", "k_t"),
                           ("k_c", "k_c")):
         if getattr(c, deck_key) is not None:

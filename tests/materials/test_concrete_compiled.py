@@ -88,6 +88,9 @@ def _parameters(variant: str, n: int):
     if variant == "band":  # and the mode rules blended over a band of the stresses
         return derive_concrete_parameters(53.5, 100.0, compression_tension_rule="floor",
                                           mode_rule_band=0.5)
+    if variant == "peak":  # and a direction past its peak keeping its strength
+        return derive_concrete_parameters(53.5, 100.0, compression_tension_rule="floor",
+                                          mode_rule_band=0.5, post_peak_strength="peak")
     return PARAMS
 
 
@@ -128,7 +131,7 @@ def _reference(strain, state, params, formulation, trial, frozen):
     return stress, new
 
 
-@pytest.mark.parametrize("variant", ["scalar", "per-point", "floor", "band"])
+@pytest.mark.parametrize("variant", ["scalar", "per-point", "floor", "band", "peak"])
 @pytest.mark.parametrize("trial", TRIALS)
 @pytest.mark.parametrize("formulation", FORMULATIONS)
 def test_update_equals_numpy_along_the_paths(formulation, trial, variant):
