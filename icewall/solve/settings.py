@@ -59,6 +59,12 @@ def scheme_warnings(deck: Deck) -> list[str]:
                         f"stress changes sign{worse}, and Newton need not converge next to such "
                         "a point (docs/solver.md, items 7, 10 and 18); mode_rule_band 0.1 "
                         "blends them over a band of 0.1 f't")
+    if concrete.post_peak_strength == "ray":
+        warnings.append("analysis.scheme newton with materials.concrete.post_peak_strength "
+                        "ray: the strengths of a direction past its peak move with the other "
+                        "stresses, its stress jumps where it turns from unloading to loading "
+                        "after they have fallen, and a drop's iteration may stall there "
+                        "(docs/solver.md, items 21 and 22); post_peak_strength peak keeps them")
     interface = deck.materials.interface
     preload = deck.loads.preload
     if (preload is not None and preload.axial_force > 0.0 and interface.model == "gap"

@@ -149,3 +149,20 @@ def test_check_warns_when_the_newton_scheme_meets_the_sharp_mode_rules():
                    "materials.concrete.mode_rule_band=0.1"], []):
         quiet = runner.invoke(main, ["check", deck, *extra])
         assert quiet.exit_code == 0 and "mode_rule_band" not in quiet.output
+
+
+def test_check_warns_when_the_newton_scheme_meets_moving_post_peak_strengths():
+    """The same for post_peak_strength ray (docs/solver.md items 21-22): one line under the
+    Newton scheme, none with peak or under the secant scheme."""
+    from pathlib import Path
+
+    deck = str(Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml")
+    runner = CliRunner()
+    band = ["--set", "materials.concrete.mode_rule_band=0.1"]
+    newton = runner.invoke(main, ["check", deck, "--set", "analysis.scheme=newton", *band])
+    lines = [line for line in newton.output.splitlines() if "post_peak_strength" in line]
+    assert newton.exit_code == 0 and len(lines) == 1 and lines[0].startswith("warning: ")
+    for extra in (["--set", "analysis.scheme=newton", *band, "--set",
+                   "materials.concrete.post_peak_strength=peak"], []):
+        quiet = runner.invoke(main, ["check", deck, *extra])
+        assert quiet.exit_code == 0 and "post_peak_strength" not in quiet.output
