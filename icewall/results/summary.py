@@ -91,6 +91,20 @@ def _ductility_rows(d: dict | None, unit: str) -> list[tuple[str, str]]:
             ("ductility note", d["message"])]
 
 
+LISTED_SNAP_THROUGHS = 6
+"""More snap-throughs than this are given as a count, the first few and the last."""
+
+
+def _deflection_list(deflections) -> str:
+    """The deflections as "at 2.06 mm, at 3.1 mm"; for many (a Newton run may drop hundreds
+    of times) their count, the first LISTED_SNAP_THROUGHS - 1 and the last."""
+    items = [f"at {d:.4g} mm" for d in deflections]
+    if len(items) <= LISTED_SNAP_THROUGHS:
+        return ", ".join(items) or "none"
+    return (f"{len(items)}: " + ", ".join(items[:LISTED_SNAP_THROUGHS - 1])
+            + f", ..., {items[-1]}")
+
+
 def format_summary(summary: dict) -> str:
     """Human-readable block of aligned ``key : value unit`` lines."""
     from icewall.analysis.mechanism import format_mechanism
@@ -116,8 +130,7 @@ def format_summary(summary: dict) -> str:
         ("final deflection", _num(s.get("final_deflection"), "mm")),
         ("total iterations", _num(s.get("total_iterations"))),
         ("iterations per step", iters),
-        ("snap-throughs", ", ".join(f"at {d:.4g} mm" for d in s.get("snap_throughs") or ())
-         or "none"),
+        ("snap-throughs", _deflection_list(s.get("snap_throughs") or ())),
         ("steps over a stall", ", ".join(f"to {d:.4g} mm" for d in s.get("jumps") or ())
          or "none"),
         ("run time", _num(s.get("run_time_s"), "s", ".1f")),

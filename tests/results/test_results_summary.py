@@ -96,5 +96,8 @@ def test_summary_lists_accepted_snap_throughs(tmp_path):
     s = summarize(path)
     assert s["snap_throughs"] == [pytest.approx(2.0625)]
     assert "snap-throughs          : at 2.062 mm" in format_summary(s)
+    many = format_summary({**s, "snap_throughs": [5.0 + 0.5 * k for k in range(40)]})
+    assert ("snap-throughs          : 40: at 5 mm, at 5.5 mm, at 6 mm, at 6.5 mm, at 7 mm, "
+            "..., at 24.5 mm") in many
     curve_file(tmp_path / "none.h5")
     assert "snap-throughs          : none" in format_summary(summarize(tmp_path / "none.h5"))
