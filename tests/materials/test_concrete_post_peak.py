@@ -111,3 +111,18 @@ def test_tangent_and_zero_increment_over_random_damaged_states(formulation):
 def test_unknown_reading_is_refused():
     with pytest.raises(ValueError, match="post_peak_strength must be 'ray' or 'peak'"):
         dataclasses.replace(RAY, post_peak_strength="frozen")
+
+
+def test_the_deck_option_reaches_the_law():
+    """`materials.concrete.post_peak_strength` of a deck sets the parameters every concrete
+    point of the model gets (model.materials.concrete_parameters); the decks keep "ray"."""
+    from pathlib import Path
+
+    from icewall.deck.load import load_deck
+    from icewall.model.materials import concrete_parameters
+
+    deck = Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml"
+    for overrides, expected in (([], "ray"),
+                                (["materials.concrete.post_peak_strength=peak"], "peak")):
+        loaded = load_deck(deck, overrides).deck
+        assert concrete_parameters(loaded, 50.0).post_peak_strength == expected
