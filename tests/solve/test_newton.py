@@ -307,3 +307,18 @@ def test_a_drop_window_without_progress_is_a_stall():
     assert progress.made(99.0)  # the load falls by 1 %: progress
     progress.window = 0.5e-2
     assert progress.made(99.0)  # the unbalance halves: progress
+
+
+def test_a_drop_sub_step_must_lower_the_unbalance_it_starts_from():
+    """Below the loose sub-step tolerance a sub-step is held to half the static unbalance it
+    starts from (never below the deck's tolerance): else it is accepted after one iteration
+    and the drop creeps (docs/solver.md item 23)."""
+    from icewall.solve.drop import SUBSTEP_TOLERANCE, substep_settings
+
+    deck = replace(settings(1.0, 0.1), tolerance_load=1e-4)
+    loose = replace(deck, tolerance_load=SUBSTEP_TOLERANCE * 1e-4)
+    for static, expected in ((float("inf"), 1e-3), (5e-3, 1e-3), (1e-3, 5e-4), (3e-4, 1.5e-4),
+                             (1.5e-4, 1e-4), (5e-5, 1e-4)):
+        assert substep_settings(loose, deck, static).tolerance_load == pytest.approx(expected)
+    assert substep_settings(loose, deck, 3e-4).tolerance_displacement == (
+        loose.tolerance_displacement)
