@@ -8,6 +8,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from test_concrete_tangent import random_damaged_points
 
 from icewall.materials.concrete import update_concrete
 from icewall.materials.concrete_state import ConcreteState
@@ -88,16 +89,8 @@ def test_tangent_and_zero_increment_over_random_damaged_states(formulation):
     rng = np.random.default_rng(3)
     n = 400
     params = dataclasses.replace(PEAK, compression_tension_rule="floor", mode_rule_band=0.1)
-    state = ConcreteState.initial(n, params)
-    base = rng.normal(size=(n, 4)) * rng.choice([3e-4, 1e-3, 3e-3], size=(n, 1))
-    turn = rng.normal(size=(n, 4)) * 3e-4
-    if formulation != "axisymmetric":
-        base[:, 2] = turn[:, 2] = 0.0
-    for t in np.linspace(0.1, 1.0, 8):
-        _, _, state = update_concrete(t * base + (t > 0.6) * t * turn, state, params,
-                                      formulation, "corotational")
+    state, strain = random_damaged_points(params, formulation, n, rng)
     assert state.cracked.any(axis=1).mean() > 0.5 and state.crushed.any()
-    strain = 1.05 * base + turn
     stress, _, trial = update_concrete(strain, state, params, formulation, "corotational")
     again = update_concrete(trial.strain, trial, params, formulation, "corotational")[0]
     np.testing.assert_allclose(again, stress, rtol=0.0, atol=1e-12 * np.abs(stress).max())

@@ -215,6 +215,21 @@ def test_tangent_of_the_substepped_incremental_update():
         assert np.abs(tangent @ direction - expected).max() <= 1e-6 * np.abs(expected).max()
 
 
+def random_damaged_points(params, formulation: str, n: int, rng: np.random.Generator
+                          ) -> tuple[ConcreteState, np.ndarray]:
+    """(committed state, next strain) of n points driven along random proportional paths that
+    turn at 60 % (cracked, crushed, closing and rotating points), corotational trial."""
+    state = ConcreteState.initial(n, params)
+    base = rng.normal(size=(n, 4)) * rng.choice([3e-4, 1e-3, 3e-3], size=(n, 1))
+    turn = rng.normal(size=(n, 4)) * 3e-4
+    if formulation != "axisymmetric":
+        base[:, 2] = turn[:, 2] = 0.0
+    for t in np.linspace(0.1, 1.0, 8):
+        _, _, state = update_concrete(t * base + (t > 0.6) * t * turn, state, params,
+                                      formulation, "corotational")
+    return state, 1.05 * base + turn
+
+
 def test_analytic_and_differenced_principal_moduli_agree_on_random_states():
     """Over many random damaged points (cracked, crushed, closing, rotating; both §3.2.5 rule-b
     readings) the analytic tangent equals the differenced one except at the few points whose
@@ -225,15 +240,7 @@ def test_analytic_and_differenced_principal_moduli_agree_on_random_states():
     for rule in ("equal", "floor"):
         params = derive_concrete_parameters(53.5, 50.0, compression_tension_rule=rule)
         for formulation in FORMULATIONS:
-            state = ConcreteState.initial(n, params)
-            base = rng.normal(size=(n, 4)) * rng.choice([3e-4, 1e-3, 3e-3], size=(n, 1))
-            turn = rng.normal(size=(n, 4)) * 3e-4
-            if formulation != "axisymmetric":
-                base[:, 2] = turn[:, 2] = 0.0
-            for t in np.linspace(0.1, 1.0, 8):
-                _, _, state = update_concrete(t * base + (t > 0.6) * t * turn, state, params,
-                                              formulation, "corotational")
-            strain = 1.05 * base + turn
+            state, strain = random_damaged_points(params, formulation, n, rng)
             analytic = consistent_tangent(strain, state, params, formulation, method="analytic")
             differenced = consistent_tangent(strain, state, params, formulation,
                                              method="differences")
