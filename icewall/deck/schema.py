@@ -151,7 +151,7 @@ class Concrete:
         "kept from where the direction passed its peak, so its softening branch (eq. 3.11, "
         "whose area sigma_ic / k is the energy of eqs. 3.26-3.30) no longer moves with the "
         "other stresses and its stress is continuous where it turns from unloading to "
-        "loading (NumPy kernel only)", choices=("ray", "peak"))
+        "loading", choices=("ray", "peak"))
     trial_stress: str = option(
         "corotational", doc="trial stress of Fig. 3.12 step 3: corotational = committed "
         "principal stresses carried with the rotating axes plus C dEps between the committed "
