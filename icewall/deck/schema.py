@@ -285,6 +285,16 @@ class Loads:
     control: Control = option(Control(), doc="displacement control")
 
 
+SCHEME_DEFAULTS: dict[str, dict[str, float | int]] = {
+    "secant": {"tolerance_displacement": 0.05, "tolerance_load": 0.05, "max_iterations": 200,
+               "max_step_cuts": 4},  # the thesis' 5 % (4.2.3); a secant step may crawl
+    "newton": {"tolerance_displacement": 1e-4, "tolerance_load": 1e-4, "max_iterations": 40,
+               "max_step_cuts": 6},  # docs/solver.md: the runs of items 17-25
+}
+"""analysis.tolerance_displacement, tolerance_load, max_iterations and max_step_cuts of a deck
+that leaves them out, by analysis.scheme."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class Analysis:
     solver: str = option("nonlinear", doc="nonlinear: the thesis model, displacement control "
@@ -299,13 +309,19 @@ class Analysis:
     scheme: str = option("secant", doc="iteration of the nonlinear solver: secant (the thesis' "
                          "secant iteration with relaxation, chatter damping and fallbacks) or "
                          "newton (Newton-Raphson with the consistent tangent, line search and "
-                         "automatic step size; set the tolerances to 1e-4)",
+                         "automatic step size); the tolerances, max_iterations and "
+                         "max_step_cuts a deck leaves out take the scheme's defaults",
                          choices=("secant", "newton"))
-    tolerance_displacement: float = option(0.05, doc="displacement norm tolerance (eq. 4.4)",
-                                           exclusive_minimum=0.0, maximum=1.0)
-    tolerance_load: float = option(0.05, doc="load norm tolerance (eq. 4.5)",
-                                   exclusive_minimum=0.0, maximum=1.0)
-    max_iterations: int = option(200, doc="iteration limit per step", minimum=1)
+    tolerance_displacement: float | None = option(
+        None, doc="displacement norm tolerance (eq. 4.4); default 0.05 under scheme secant "
+        "(the thesis), 1e-4 under newton", exclusive_minimum=0.0, maximum=1.0)
+    tolerance_load: float | None = option(
+        None, doc="load norm tolerance (eq. 4.5); default 0.05 under scheme secant (the "
+        "thesis), 1e-4 under newton", exclusive_minimum=0.0, maximum=1.0)
+    max_iterations: int | None = option(
+        None, doc="iteration limit per step; default 200 under scheme secant, 40 under newton "
+        "(whose iterations converge quadratically or not at all: a failed try costs 5x less)",
+        minimum=1)
     concrete_stiffness: str = option("secant-coaxial", doc="concrete moduli of the iteration "
                                      "matrix: secant-coaxial (secant E_i, nu_i with the G12 that "
                                      "keeps stress and strain co-axial, errata §3), secant (the "
@@ -353,8 +369,9 @@ class Analysis:
                                    "fewer iterations, but 8 of the 18 specimen decks stop "
                                    "before 40 mm instead of 5)", exclusive_minimum=0.0,
                                    maximum=3.0)
-    max_step_cuts: int = option(4, doc="halvings of a failed increment before the run stops",
-                                minimum=0, maximum=20)
+    max_step_cuts: int | None = option(
+        None, doc="halvings of a failed increment before the run stops (newton: before a "
+        "drop); default 4 under scheme secant, 6 under newton", minimum=0, maximum=20)
     stiffness_update: str = option("every_iteration", doc="re-form the (secant) stiffness every "
                                    "iteration (thesis) or once per step",
                                    choices=("every_iteration", "every_step"))
@@ -364,6 +381,13 @@ class Analysis:
                                "finish on this machine (over 1e5 steps, over 2e5 elements, more "
                                "memory than available, more output than free disk); each limit "
                                "passed is then a warning")
+
+    def __post_init__(self) -> None:
+        # the keys a deck leaves out (None) take its scheme's defaults
+        defaults = SCHEME_DEFAULTS.get(self.scheme, SCHEME_DEFAULTS["secant"])
+        for key, value in defaults.items():
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, value)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -67,3 +67,26 @@ def test_deck_text_from_a_result_file_loads_the_same_deck():
     assert again.deck.analysis.gauss == 2
     with pytest.raises(DeckError, match="result:/deck"):
         load_deck_text(loaded.text.replace("fc: 53.5", "fc: -1"), "result:/deck")
+
+
+def test_scheme_defaults_fill_the_solver_limits_a_deck_leaves_out():
+    """analysis.tolerance_*, max_iterations and max_step_cuts left out of a deck take the
+    scheme's defaults (the thesis' 5 % under secant, 1e-4 under newton); given ones are kept,
+    whatever the scheme; a directly built Analysis resolves them the same way."""
+    from icewall.deck.schema import SCHEME_DEFAULTS, Analysis
+
+    limits = ("tolerance_displacement", "tolerance_load", "max_iterations", "max_step_cuts")
+    for scheme, overrides in (("secant", []), ("newton", ["analysis.scheme=newton"])):
+        analysis = load_deck(DECKS / "cf4.yaml", overrides).deck.analysis
+        assert {k: getattr(analysis, k) for k in limits} == SCHEME_DEFAULTS[scheme]
+        assert {k: getattr(Analysis(scheme=scheme), k) for k in limits} == SCHEME_DEFAULTS[scheme]
+    assert SCHEME_DEFAULTS["newton"] == {"tolerance_displacement": 1e-4, "tolerance_load": 1e-4,
+                                         "max_iterations": 40, "max_step_cuts": 6}
+    assert SCHEME_DEFAULTS["secant"] == {"tolerance_displacement": 0.05, "tolerance_load": 0.05,
+                                         "max_iterations": 200, "max_step_cuts": 4}
+    given = load_deck(DECKS / "cf4.yaml", ["analysis.scheme=newton", "analysis.tolerance_load=0.01",
+                                           "analysis.max_step_cuts=2"]).deck.analysis
+    assert (given.tolerance_load, given.max_step_cuts) == (0.01, 2)
+    assert (given.tolerance_displacement, given.max_iterations) == (1e-4, 40)
+    kept = load_deck(DECKS / "cf4.yaml", ["analysis.max_iterations=40"]).deck.analysis
+    assert (kept.max_iterations, kept.tolerance_load) == (40, 0.05)
