@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 
 import numpy as np
@@ -29,6 +30,8 @@ def summarize(path: str | os.PathLike) -> dict:
 
     with open_result(path) as r:
         a, h = r.attrs, r.history
+        deck_text = r.deck_text
+        overrides = json.loads(a.get("deck_overrides") or "[]")
         solver = a.get("solver")
         ductility = result_ductility(r) if len(h["step"]) and solver != "linear" else None
     if solver == "linear":
@@ -50,6 +53,7 @@ def summarize(path: str | os.PathLike) -> dict:
         "jumps": [],  # control deflections reached by a step over a stall (max_jumps)
         # issue 20 §1: bottom plate at the peak vs f_y, first crushing, residual mechanism
         "mechanism": mechanism_check(path) if len(h["step"]) else None,
+        "equilibrium": None,  # how far the stored steps are from equilibrium (_equilibrium)
     }
     if out["n_steps"]:
         load, defl, its = h["load"], h["control_displacement"], h["iterations"]
@@ -65,6 +69,26 @@ def summarize(path: str | os.PathLike) -> dict:
             out["snap_throughs"] = [float(d) for d in defl[np.asarray(h["snap_back"]) > 0]]
         if "jumped" in h:
             out["jumps"] = [float(d) for d in defl[np.asarray(h["jumped"]) > 0]]
+        if solver != "linear":
+            out["equilibrium"] = _equilibrium(h, deck_text, overrides)
+    return out
+
+
+def _equilibrium(history, deck_text: str, overrides: list[str]) -> dict:
+    """The largest load and displacement norms (eqs. 4.4-4.5) over the stored steps and, where
+    the stored deck (with the run's --set overrides) reads, its scheme and tolerances."""
+    from icewall.deck.load import load_deck_text
+    from icewall.errors import DeckError
+
+    out = {"largest_load_norm": float(np.max(history["load_norm"])),
+           "largest_displacement_norm": float(np.max(history["displacement_norm"])),
+           "scheme": None, "tolerance_load": None, "tolerance_displacement": None}
+    try:
+        analysis = load_deck_text(deck_text, "the stored deck", overrides).deck.analysis
+    except DeckError:  # a file written without a readable deck: the norms alone
+        return out
+    out.update(scheme=analysis.scheme, tolerance_load=analysis.tolerance_load,
+               tolerance_displacement=analysis.tolerance_displacement)
     return out
 
 
@@ -105,6 +129,33 @@ def _deflection_list(deflections) -> str:
             + f", ..., {items[-1]}")
 
 
+CONVERGED_TOLERANCE = 1e-4
+"""Tolerances at or below this make each step a converged equilibrium in the summary's words
+(issue 19's acceptance level); at 1e-3 TF-1's peak is still 5.8 % off the 1e-4 one, and at
+the thesis' 0.05 the peaks move with the tolerance (docs/solver.md items 14, 22 and 25)."""
+
+
+def _equilibrium_text(e: dict | None, jumped: bool) -> str:
+    """One line: the largest norms of the stored steps against the run's tolerances."""
+    if not e:
+        return "-"
+    norms = (f"largest load norm {e['largest_load_norm']:.3g}, displacement norm "
+             f"{e['largest_displacement_norm']:.3g}")
+    if e.get("tolerance_load") is None:
+        return norms + " (the stored deck does not read: tolerances unknown)"
+    tol_load, tol_disp = e["tolerance_load"], e["tolerance_displacement"]
+    within = (e["largest_load_norm"] <= tol_load
+              and e["largest_displacement_norm"] <= tol_disp and not jumped)
+    if not within:
+        verdict = "not every step is an equilibrium to its tolerances"
+    elif max(tol_load, tol_disp) <= CONVERGED_TOLERANCE:
+        verdict = "every step a converged equilibrium"
+    else:
+        verdict = "every step within loose tolerances (figures move with them)"
+    return (f"{verdict}: {tol_load:g} (load), {tol_disp:g} (displacement), scheme "
+            f"{e['scheme']}; {norms}")
+
+
 def format_summary(summary: dict) -> str:
     """Human-readable block of aligned ``key : value unit`` lines."""
     from icewall.analysis.mechanism import format_mechanism
@@ -133,6 +184,7 @@ def format_summary(summary: dict) -> str:
         ("snap-throughs", _deflection_list(s.get("snap_throughs") or ())),
         ("steps over a stall", ", ".join(f"to {d:.4g} mm" for d in s.get("jumps") or ())
          or "none"),
+        ("equilibrium", _equilibrium_text(s.get("equilibrium"), bool(s.get("jumps")))),
         ("run time", _num(s.get("run_time_s"), "s", ".1f")),
         *_ductility_rows(s.get("ductility"), lu),
         *(format_mechanism(s["mechanism"]) if s.get("mechanism") else []),
