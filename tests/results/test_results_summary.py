@@ -105,19 +105,21 @@ def test_summary_lists_accepted_snap_throughs(tmp_path):
 
 def test_summary_says_whether_every_step_is_a_converged_equilibrium(tmp_path):
     """The equilibrium line reads the scheme and tolerances from the stored deck and the run's
-    --set overrides (the Newton scheme's own 1e-4 where the deck leaves them out) and compares
-    the largest stored norms with them; an unreadable stored deck gives the norms alone."""
+    --set overrides (the Newton scheme's own 1e-4 where the deck leaves them out) and judges
+    every stored step by the schemes' own test; an unreadable stored deck gives the norms
+    alone."""
     from pathlib import Path
 
     deck_text = (Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml").read_text()
 
-    def result(name, overrides, load_norms, deck=deck_text):
+    def result(name, overrides, load_norms, deck=deck_text, displacement_norm=3e-5):
         path = tmp_path / name
         w = ResultWriter(path, deck_text=deck, deck_path="cf4.yaml", mesh=one_cell_mesh(),
                          attrs={"specimen": "CF-4", "load_measure": "w", "load_unit": "MPa",
                                 "deck_overrides": json.dumps(overrides)})
         for i, norm in enumerate(load_norms):
-            w.write_step(StepRecord(i + 1, 1.0 + i, 2.0 + i, 1.0, 5, 3e-5, norm, 0.1))
+            w.write_step(StepRecord(i + 1, 1.0 + i, 2.0 + i, 1.0, 5, displacement_norm, norm,
+                                    0.1))
         w.finish("completed", "")
         return format_summary(summarize(path))
 
@@ -125,8 +127,12 @@ def test_summary_says_whether_every_step_is_a_converged_equilibrium(tmp_path):
     assert ("equilibrium            : every step a converged equilibrium: 0.0001 (load), "
             "0.0001 (displacement), scheme newton; largest load norm 9e-05, displacement "
             "norm 3e-05") in result("converged.h5", newton, [2e-5, 9e-5])
-    assert "not every step is an equilibrium to its tolerances: 0.0001 (load)" in result(
-        "one_off.h5", newton, [2e-5, 2e-4])
+    assert "not every step is an equilibrium to its tolerances (1 outside): 0.0001 (load)" in (
+        result("one_off.h5", newton, [2e-5, 2e-4]))
+    # the schemes' own test: a load norm 100x inside the tolerance passes a first correction
+    assert "every step a converged equilibrium" in result("first.h5", newton, [5e-7],
+                                                          displacement_norm=3e-3)
+    assert "(1 outside)" in result("not_first.h5", newton, [5e-6], displacement_norm=3e-3)
     assert ("every step within loose tolerances (figures move with them): 0.05 (load), "
             "0.05 (displacement), scheme secant") in result("secant.h5", [], [0.04, 0.01])
     assert "every step within loose tolerances" in result(
