@@ -7,6 +7,7 @@ import os
 
 import numpy as np
 
+from icewall.deck.schema import CONVERGED_TOLERANCE
 from icewall.results.reader import open_result
 
 _NO_FINISH = "no finish record: run still going, or killed"
@@ -132,12 +133,6 @@ def _deflection_list(deflections) -> str:
         return ", ".join(items) or "none"
     return (f"{len(items)}: " + ", ".join(items[:LISTED_SNAP_THROUGHS - 1])
             + f", ..., {items[-1]}")
-
-
-CONVERGED_TOLERANCE = 1e-4
-"""Tolerances at or below this make each step a converged equilibrium in the summary's words
-(issue 19's acceptance level); at 1e-3 TF-1's peak is still 5.8 % off the 1e-4 one, and at
-the thesis' 0.05 the peaks move with the tolerance (docs/solver.md items 14, 22 and 25)."""
 
 
 def _equilibrium_text(e: dict | None, jumped: bool) -> str:

@@ -166,3 +166,21 @@ def test_check_warns_when_the_newton_scheme_meets_moving_post_peak_strengths():
                    "materials.concrete.post_peak_strength=peak"], []):
         quiet = runner.invoke(main, ["check", deck, *extra])
         assert quiet.exit_code == 0 and "post_peak_strength" not in quiet.output
+
+
+def test_check_warns_when_the_newton_scheme_runs_at_a_loose_tolerance():
+    """A Newton deck with a tolerance above 1e-4 gets one warning line (its figures are not
+    converged equilibria: docs/solver.md items 25, 27); none at its own 1e-4 or tighter, and
+    none under the secant scheme, whose 0.05 is the thesis'."""
+    from pathlib import Path
+
+    deck = str(Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml")
+    runner = CliRunner()
+    newton = ["--set", "analysis.scheme=newton", "--set", "materials.concrete.mode_rule_band=0.1",
+              "--set", "materials.concrete.post_peak_strength=peak"]
+    loose = runner.invoke(main, ["check", deck, *newton, "--set", "analysis.tolerance_load=1e-3"])
+    lines = [line for line in loose.output.splitlines() if "a tolerance of 0.001" in line]
+    assert loose.exit_code == 0 and len(lines) == 1 and lines[0].startswith("warning: ")
+    for extra in (newton, [*newton, "--set", "analysis.tolerance_displacement=1e-6"], []):
+        quiet = runner.invoke(main, ["check", deck, *extra])
+        assert quiet.exit_code == 0 and "a tolerance of" not in quiet.output
