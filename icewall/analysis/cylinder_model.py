@@ -22,7 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from icewall.deck.schema import Analysis, Concrete, Control, Interface
+from icewall.deck.analysis_options import Analysis
+from icewall.deck.schema import Concrete, Control, Interface
 from icewall.errors import ConvergenceError
 from icewall.fem.assembly import Assembler
 from icewall.fem.kinematics import element_kinematics, gauss_point_spacing

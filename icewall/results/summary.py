@@ -7,7 +7,7 @@ import os
 
 import numpy as np
 
-from icewall.deck.schema import CONVERGED_TOLERANCE
+from icewall.deck.analysis_options import CONVERGED_TOLERANCE
 from icewall.results.reader import open_result
 
 _NO_FINISH = "no finish record: run still going, or killed"

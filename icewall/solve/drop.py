@@ -60,7 +60,8 @@ SUBSTEP_ITERATIONS = 20
 retried with other dampers."""
 SUBSTEP_TOLERANCE = 10.0
 """The sub-steps are the drop's path, not results: each converges to this multiple of the
-deck's tolerances; the state the drop ends at meets the deck's own."""
+deck's tolerances at most (tighter near the end of a drop: substep_settings); the state the
+drop ends at meets the deck's own."""
 SUBSTEP_FRACTION = 0.5
 """A sub-step converges to at most this fraction of the static unbalance it starts from."""
 SMALLEST_INVERSE_STEP = 1e-4

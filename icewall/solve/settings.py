@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from icewall.deck.schema import CONVERGED_TOLERANCE, Deck
+from icewall.deck.analysis_options import CONVERGED_TOLERANCE
+from icewall.deck.schema import Deck
 
 
 @dataclass(frozen=True)
@@ -50,13 +51,12 @@ def scheme_warnings(deck: Deck) -> list[str]:
     if deck.analysis.scheme != "newton" or deck.analysis.solver == "linear":
         return []
     warnings = []
-    a = deck.analysis
-    loosest = max(a.tolerance_load, a.tolerance_displacement)
+    loosest = max(deck.analysis.tolerance_load, deck.analysis.tolerance_displacement)
     if loosest > CONVERGED_TOLERANCE:
         warnings.append(f"analysis.scheme newton with a tolerance of {loosest:g}: its figures "
-                        "are converged equilibria only at 1e-4 or tighter (the scheme's "
-                        "default); at 1e-3 TF-1's peak is 5.8 % off (docs/solver.md, items 25 "
-                        "and 27)")
+                        f"are converged equilibria only at {CONVERGED_TOLERANCE:g} or tighter "
+                        "(the scheme's default); at 1e-3 TF-1's peak is 5.8 % off "
+                        "(docs/solver.md, items 25 and 27)")
     concrete = deck.materials.concrete
     if concrete.mode_rule_band == 0.0:
         worse = (" (compression_tension_rule equal: also the confined compressive strength)"

@@ -73,7 +73,7 @@ def test_scheme_defaults_fill_the_solver_limits_a_deck_leaves_out():
     """analysis.tolerance_*, max_iterations and max_step_cuts left out of a deck take the
     scheme's defaults (the thesis' 5 % under secant, 1e-4 under newton); given ones are kept,
     whatever the scheme; a directly built Analysis resolves them the same way."""
-    from icewall.deck.schema import SCHEME_DEFAULTS, Analysis
+    from icewall.deck.analysis_options import SCHEME_DEFAULTS, Analysis
 
     limits = ("tolerance_displacement", "tolerance_load", "max_iterations", "max_step_cuts")
     for scheme, overrides in (("secant", []), ("newton", ["analysis.scheme=newton"])):

@@ -47,8 +47,8 @@ def test_newton_elastic_steps_converge_tightly(tmp_path, interface):
 
 def test_newton_traces_cf4_through_its_peak_with_every_step_converged(tmp_path):
     """CF-4 under the converged scheme at its own limits (tolerances 1e-4, 40 iterations, 6
-    step cuts: deck.schema.SCHEME_DEFAULTS) with the blended mode rules and the kept post-peak
-    strengths, to 7.5 mm: every stored step an equilibrium within 1e-4 on both norms, none
+    step cuts: deck.analysis_options.SCHEME_DEFAULTS) with the blended mode rules and the kept
+    post-peak strengths, to 7.5 mm: every stored step an equilibrium within 1e-4 on both norms, none
     jumped, and the peak icewall computed when docs/solver.md items 22 and 25 were measured
     (6.25491 MPa at 6.976 mm; the same to the printed digits over round-off realizations,
     OpenBLAS kernels and the NumPy/numba concrete kernels), within the issue's 0.3 %."""
