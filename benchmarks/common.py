@@ -60,7 +60,8 @@ def bare_factor_solve(A, backend: str, repeats: int = 2) -> float:
 class PhaseTimer:
     """Times the phases of every global iteration of a nonlinear run.
 
-    constitutive: Structure.evaluate (strains, material laws, internal forces);
+    constitutive: Structure.evaluate (strains, material laws, internal forces) and
+    Structure.with_tangent (the consistent tangent of an evaluation);
     assembly: Structure.stiffness; matrix: building the iteration matrix (constraints'
     factorize minus the LU); lu: the sparse factorisation with its pivot check;
     solves: the two solves of displacement control (with refinement and checks);
@@ -124,6 +125,9 @@ class PhaseTimer:
         targets = [
             (Structure, "evaluate", self._timed("constitutive", Structure.evaluate)),
             (Structure, "stiffness", self._timed("assembly", Structure.stiffness)),
+            *([(Structure, "with_tangent",
+                self._timed("constitutive", Structure.with_tangent))]
+              if hasattr(Structure, "with_tangent") else []),
             (gap_constraints, "factorize", self._timed("lu", gap_constraints.factorize)),
             (constraints.Factorization, "__init__",
              self._timed("lu", constraints.Factorization.__init__)),

@@ -335,18 +335,32 @@ def update_with_tangent(strain: np.ndarray, state: ConcreteState, params: Any,
 
     `update(strain, state, params, formulation, trial_stress=, with_moduli=False)` is the
     stress update the solver calls (`update_concrete`, its sub-stepped or compiled form). The
-    tangent is d sigma / d eps of that map at the fixed committed `state`, unsymmetric in
-    general and indefinite on softening branches; no floor or secant option applies to it.
-    plane_strain: eps_zz is not an input (column zz zero); plane_stress: sigma_zz = 0 is
-    condensed (row and column zz zero); axisymmetric: all four components.
-
-    `method`: "analytic" principal moduli (`principal_moduli`; corotational and total trial
-    stresses, which are not sub-stepped), "differences" (any trial stress and update), or
-    "auto": analytic unless the trial stress is incremental.
+    tangent is d sigma / d eps of that map at the fixed committed `state` (`tangent_of_update`).
     """
     strain = np.asarray(strain, dtype=float).reshape(-1, 4)
     stress, _, trial = update(strain, state, params, formulation, trial_stress=trial_stress,
                               with_moduli=False)
+    return stress, tangent_of_update(strain, stress, trial, state, params, formulation,
+                                     trial_stress, update, method), trial
+
+
+def tangent_of_update(strain: np.ndarray, stress: np.ndarray, trial: ConcreteState,
+                      state: ConcreteState, params: Any, formulation: str,
+                      trial_stress: str = "corotational", update: Update = update_concrete,
+                      method: str = "auto") -> np.ndarray:
+    """Consistent tangent (n, 4, 4) of `update` at `strain`, where it gave `stress` and the
+    trial state `trial` from the committed `state` (no second update on the analytic path).
+
+    Unsymmetric in general and indefinite on softening branches; no floor or secant option
+    applies to it. plane_strain: eps_zz is not an input (column zz zero); plane_stress:
+    sigma_zz = 0 is condensed (row and column zz zero); axisymmetric: all four components.
+
+    `method`: "analytic" principal moduli (`principal_moduli`; corotational and total trial
+    stresses, which are not sub-stepped), "differences" (any trial stress and update: `update`
+    is called again at perturbed strains), or "auto": analytic unless the trial stress is
+    incremental.
+    """
+    strain = np.asarray(strain, dtype=float).reshape(-1, 4)
     angle = trial.angle
     principal = local_normal_components(trial.strain, angle, 1.0)
     principal_stress = local_normal_components(stress, angle, 2.0)
@@ -369,7 +383,7 @@ def update_with_tangent(strain: np.ndarray, state: ConcreteState, params: Any,
     if formulation == "plane_stress":
         L[:, 2, :] = 0.0
     T = strain_rotation(angle)
-    return stress, np.matmul(T.transpose(0, 2, 1), np.matmul(L, T)), trial
+    return np.matmul(T.transpose(0, 2, 1), np.matmul(L, T))
 
 
 def consistent_tangent(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,

@@ -33,6 +33,10 @@ class MaterialGroup:
     # law accepts tangent=True and then returns the consistent tangent as moduli (the other
     # laws' moduli already are their tangents: steel's elastoplastic one, elastic D)
     tangent_switch: bool = False
+    # (strain, stress, trial, committed, params) -> the consistent tangent of the law's update
+    # that gave stress and trial at strain: the tangent of an evaluation already made
+    # (Structure.with_tangent), where computing it costs less than updating again
+    tangent_of: Callable[..., np.ndarray] | None = None
     kernel: str = "numpy"  # concrete update: numpy, or numba (concrete_compiled)
 
 
@@ -130,7 +134,7 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
         compiled_floored_moduli,
         compiled_substepped,
     )
-    from icewall.materials.concrete_tangent import update_with_tangent
+    from icewall.materials.concrete_tangent import tangent_of_update, update_with_tangent
     from icewall.materials.substep import update_concrete_substepped
 
     c = deck.materials.concrete
@@ -164,6 +168,11 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
             raise ValueError("the consistent concrete tangent is not defined for frozen points")
         return update_with_tangent(strain, state, p, formulation, trial_kind, update)
 
+    def tangent_of(strain, stress, trial, state, p):
+        """The consistent tangent at an update already made (concrete_tangent)."""
+        return tangent_of_update(strain, stress, trial, state, p, formulation, trial_kind,
+                                 compiled_update if kernel == "numba" else numpy_update)
+
     def compiled_law(strain, state, p, frozen=None, returned_secant=False, tangent=False):
         if tangent:
             return consistent(strain, state, p, frozen, compiled_update)
@@ -189,7 +198,8 @@ def _concrete_group(deck: Deck, cells: np.ndarray, params: ConcreteParameters,
     return MaterialGroup("concrete", "rotating_crack", cells,
                          compiled_law if kernel == "numba" else law, point_params,
                          ConcreteState.initial(h_points.size, params), freezable=True,
-                         kernel=kernel, tangent_switch=True)
+                         kernel=kernel, tangent_switch=True,
+                         tangent_of=tangent_of)
 
 
 def coaxial_shear_modulus(state: Any) -> np.ndarray:

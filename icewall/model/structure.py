@@ -32,6 +32,7 @@ class Evaluation:
     moduli: np.ndarray  # (n_el, nq, 4, 4)
     internal_force: np.ndarray  # (n_eq,)
     states: tuple[Any, ...]  # trial state per group
+    tangent: bool = False  # moduli are every law's consistent tangent d sigma / d eps
 
 
 class Structure:
@@ -86,7 +87,29 @@ class Structure:
             moduli[group.cells] = np.broadcast_to(D, (n, 4, 4)).reshape(-1, self.n_gauss, 4, 4)
             trial.append(new)
         f_int = self.assembler.vector(internal_force_blocks(self.kinematics, stress))
-        return Evaluation(eps, stress, moduli, f_int, tuple(trial))
+        return Evaluation(eps, stress, moduli, f_int, tuple(trial), tangent)
+
+    def with_tangent(self, evaluation: Evaluation, states: tuple[Any, ...]) -> Evaluation:
+        """`evaluation` (made from the committed `states`) with every law's consistent tangent
+        as moduli: the same as `evaluate(..., tangent=True)` at its displacements, from the
+        stresses and trial states it holds (a law's `tangent_of`; the others' moduli already
+        are their tangents), without updating the laws again."""
+        if evaluation.tangent:
+            return evaluation
+        moduli = evaluation.moduli.copy()
+        for group, state, trial in zip(self.groups, states, evaluation.states, strict=True):
+            if not group.tangent_switch:
+                continue
+            n, cells = group.cells.size * self.n_gauss, group.cells
+            if group.tangent_of is None:  # update again, with the tangent
+                D = group.law(evaluation.strain[cells].reshape(n, 4), state, group.params,
+                              tangent=True)[1]
+            else:
+                D = group.tangent_of(evaluation.strain[cells].reshape(n, 4),
+                                     evaluation.stress[cells].reshape(n, 4), trial, state,
+                                     group.params)
+            moduli[cells] = np.broadcast_to(D, (n, 4, 4)).reshape(-1, self.n_gauss, 4, 4)
+        return replace(evaluation, moduli=moduli, tangent=True)
 
     def stiffness(self, evaluation: Evaluation) -> sp.csr_matrix:
         """Global stiffness from the moduli of `evaluation` (secant or tangent, per law)."""

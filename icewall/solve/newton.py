@@ -1,14 +1,14 @@
 """Newton-Raphson iteration of one increment with the consistent tangent and a line search.
 
-One iteration: evaluate the structure at the current iterate (stress, consistent tangent,
-internal force), factorise the augmented tangent (supports and gap elements, whose pair states
-are updated after every solve: an active-set Newton on the contact and stick-slip conditions),
-solve for the reference load and the unbalance (bordering, eq. 3.48: the control
-displacement reaches its target exactly after every full step), and take the step scaled by
-a backtracking line search on the equilibrium norm. Converged means: displacement norm (eq.
-4.4) and load norm (eq. 4.5) within the tolerances, and no pair changed state in the last
-iteration; the constitutive law is never frozen or relaxed, so a converged increment is an
-equilibrium of the law as it is.
+One iteration: add the consistent tangent to the evaluation of the current iterate (stress,
+internal force; the line search's trials are evaluated without it), factorise the augmented
+tangent (supports and gap elements, whose pair states are updated after every solve: an
+active-set Newton on the contact and stick-slip conditions), solve for the reference load and
+the unbalance (bordering, eq. 3.48: the control displacement reaches its target exactly after
+every full step), and take the step scaled by a backtracking line search on the equilibrium
+norm. Converged means: displacement norm (eq. 4.4) and load norm (eq. 4.5) within the
+tolerances, and no pair changed state in the last iteration; the constitutive law is never
+frozen or relaxed, so a converged increment is an equilibrium of the law as it is.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ def _evaluate(problem: Problem, start: PathState, u: np.ndarray, P: float,
               F_pre: np.ndarray, R: np.ndarray, lam_force: np.ndarray | None = None,
               dampers: Dampers | None = None) -> Iterate:
     s, c = problem.structure, problem.constraints
-    ev = s.evaluate(u, start.states, tangent=True)
+    ev = s.evaluate(u, start.states)  # its tangent when a matrix is built from it
     if not np.all(np.isfinite(ev.internal_force)):
         raise StepFailed("non-finite internal forces", "NaN")
     external = P * R + c.restrict(F_pre)
@@ -127,16 +127,20 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
             iteration == 2 and current.load_norm <= 0.01 * settings.tolerance_load)
         if (iteration > 1 and displacement_ok and current.load_norm <= settings.tolerance_load
                 and (flips == 0 or _constraints_hold(problem, settings, current))):
+            # (with its tangent: a drop starts from it, icewall.solve.drop)
+            evaluation = problem.structure.with_tangent(current.evaluation, start.states)
             return Increment(kind, -float(current.u[problem.control_equation]),
                              current.load_factor, preload_factor, iteration - 1, disp_norm,
-                             current.load_norm, current.evaluation, current.u, forensics)
-        matrix_at = current.evaluation
+                             current.load_norm, evaluation, current.u, forensics)
+        tangent = problem.structure.with_tangent(current.evaluation, start.states)
+        matrix_at = tangent
         if iteration == 1 and last_increment is not None and _norm(last_increment) > 0.0:
             matrix_at = problem.structure.evaluate(
                 current.u + PREDICTOR_PROBE * last_increment, start.states, tangent=True)
         elif previous_moduli is not None:
-            matrix_at = _chords_at_kinks(problem, start, current, previous_moduli, forensics)
-        previous_moduli = current.evaluation.moduli
+            matrix_at = _chords_at_kinks(tangent, current.evaluation.moduli, previous_moduli,
+                                         forensics)
+        previous_moduli = tangent.moduli
         du, dP, dm = _newton_direction(problem, current, control, matrix_at, dampers)
         eta, trial = _line_search(problem, start, current, du, dP, dm, F_pre, R,
                                   LINE_SEARCH_RISE if flips else 1.0, dampers)
@@ -172,23 +176,22 @@ KINK_JUMP = 0.1
 crossed a kink of its law (loading/unloading, a peak): its secant stands in the matrix."""
 
 
-def _chords_at_kinks(problem: Problem, start: PathState, current: Iterate,
-                     previous_moduli: np.ndarray, forensics: dict) -> object:
-    """The evaluation whose moduli build the matrix: the consistent tangent, except at the
-    points whose tangent jumped in the last iteration (a kink crossed), where the law's
-    secant (its iteration moduli) is taken: Newton on a kinked function cycles across the
-    kink, the secant (a chord through the origin of the point's branch) does not. The
-    residual is the law's as it is; only the matrix changes."""
-    moduli = current.evaluation.moduli
+def _chords_at_kinks(tangent: object, secant: np.ndarray, previous_moduli: np.ndarray,
+                     forensics: dict) -> object:
+    """The evaluation whose moduli build the matrix: the consistent tangent (`tangent`, an
+    evaluation), except at the points whose tangent jumped from `previous_moduli` in the last
+    iteration (a kink crossed), where the law's secant (its iteration moduli, `secant`) is
+    taken: Newton on a kinked function cycles across the kink, the secant (a chord through
+    the origin of the point's branch) does not. The residual is the law's as it is; only the
+    matrix changes."""
+    moduli = tangent.moduli
     jump = np.linalg.norm(moduli - previous_moduli, axis=(-2, -1))
     size = np.maximum(np.linalg.norm(previous_moduli, axis=(-2, -1)), 1e-30)
     kinked = jump > KINK_JUMP * size
     forensics["chords"].append(int(np.count_nonzero(kinked)))
     if not kinked.any():
-        return current.evaluation
-    secant = problem.structure.evaluate(current.u, start.states).moduli
-    return replace(current.evaluation,
-                   moduli=np.where(kinked[..., None, None], secant, moduli))
+        return tangent
+    return replace(tangent, moduli=np.where(kinked[..., None, None], secant, moduli))
 
 
 def _count_changes(before, after) -> int:

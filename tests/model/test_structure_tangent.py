@@ -95,3 +95,30 @@ def test_frozen_points_have_no_consistent_tangent():
     with pytest.raises(ValueError, match="frozen"):
         structure.evaluate(np.zeros(dofs.n_equations), structure.initial_states(),
                            frozen=(np.zeros(n, bool), None), tangent=True)
+
+
+@pytest.mark.parametrize("kernel", ["numpy", "numba"])
+@pytest.mark.parametrize("formulation", ["plane_strain", "plane_stress", "axisymmetric"])
+def test_the_tangent_of_an_evaluation_is_the_tangent_evaluation_bit_for_bit(
+        formulation, kernel, monkeypatch):
+    """Structure.with_tangent (the Newton scheme's line search evaluates without the tangent
+    and adds it where a matrix is built) gives what evaluate(..., tangent=True) gives at the
+    same displacements, and leaves the evaluation it was given alone."""
+    if kernel == "numba" and not concrete_compiled.available(formulation, "corotational"):
+        pytest.skip(f"no compiled concrete kernel for {formulation} here")
+    monkeypatch.setenv(concrete_compiled.KERNEL_VARIABLE, kernel)
+    structure, dofs, points = _block(formulation)
+    committed = structure.evaluate(_field(dofs, points, 1.2e-4, 0.0, 2e-4, 1),
+                                   structure.initial_states()).states
+    u = _field(dofs, points, 1.3e-4, 3e-4, 2e-4, 2)
+    whole = structure.evaluate(u, committed, tangent=True)
+    plain = structure.evaluate(u, committed)
+    secant = plain.moduli.copy()
+    added = structure.with_tangent(plain, committed)
+    assert added.tangent and whole.tangent and not plain.tangent
+    np.testing.assert_array_equal(added.moduli, whole.moduli)
+    np.testing.assert_array_equal(added.stress, whole.stress)
+    np.testing.assert_array_equal(added.internal_force, whole.internal_force)
+    assert not np.array_equal(secant, whole.moduli)  # the secant moduli are not the tangent
+    np.testing.assert_array_equal(plain.moduli, secant)  # untouched
+    assert structure.with_tangent(added, committed) is added
