@@ -33,6 +33,9 @@ class Evaluation:
     internal_force: np.ndarray  # (n_eq,)
     states: tuple[Any, ...]  # trial state per group
     tangent: bool = False  # moduli are every law's consistent tangent d sigma / d eps
+    # the committed states it was evaluated from (None for a pass with frozen points): where
+    # Structure.with_tangent differentiates the laws
+    committed: tuple[Any, ...] | None = None
 
 
 class Structure:
@@ -87,17 +90,21 @@ class Structure:
             moduli[group.cells] = np.broadcast_to(D, (n, 4, 4)).reshape(-1, self.n_gauss, 4, 4)
             trial.append(new)
         f_int = self.assembler.vector(internal_force_blocks(self.kinematics, stress))
-        return Evaluation(eps, stress, moduli, f_int, tuple(trial), tangent)
+        return Evaluation(eps, stress, moduli, f_int, tuple(trial), tangent,
+                          None if any(m is not None for m in frozen) else states)
 
-    def with_tangent(self, evaluation: Evaluation, states: tuple[Any, ...]) -> Evaluation:
-        """`evaluation` (made from the committed `states`) with every law's consistent tangent
-        as moduli: the same as `evaluate(..., tangent=True)` at its displacements, from the
-        stresses and trial states it holds (a law's `tangent_of`; the others' moduli already
-        are their tangents), without updating the laws again."""
+    def with_tangent(self, evaluation: Evaluation) -> Evaluation:
+        """`evaluation` with every law's consistent tangent as moduli: the same as
+        `evaluate(..., tangent=True)` at its displacements, from the stresses, trial states
+        and committed states it holds (a law's `tangent_of`; the others' moduli already are
+        their tangents), without updating the laws again."""
         if evaluation.tangent:
             return evaluation
+        if evaluation.committed is None:
+            raise ValueError("an evaluation with frozen points has no consistent tangent")
         moduli = evaluation.moduli.copy()
-        for group, state, trial in zip(self.groups, states, evaluation.states, strict=True):
+        for group, state, trial in zip(self.groups, evaluation.committed, evaluation.states,
+                                       strict=True):
             if not group.tangent_switch:
                 continue
             n, cells = group.cells.size * self.n_gauss, group.cells

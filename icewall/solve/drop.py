@@ -121,8 +121,9 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
     retried with the dampers at rest on the last converged increment's motion scaled to the
     step (`last_increment`), so that they resist only the departure from it."""
     c = problem.constraints
-    evaluation = state.evaluation or problem.structure.evaluate(state.u, state.states,
-                                                                 tangent=True)
+    evaluation = (problem.structure.evaluate(state.u, state.states, tangent=True)
+                  if state.evaluation is None else problem.structure.with_tangent(
+                      state.evaluation))
     diagonal = floored_diagonal(problem.structure.stiffness(evaluation).diagonal())
     sub, iterations, next_check = state, 0, 0
     reference = float(np.linalg.norm(c.restrict(problem.reference_load)))

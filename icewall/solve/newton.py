@@ -127,12 +127,10 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
             iteration == 2 and current.load_norm <= 0.01 * settings.tolerance_load)
         if (iteration > 1 and displacement_ok and current.load_norm <= settings.tolerance_load
                 and (flips == 0 or _constraints_hold(problem, settings, current))):
-            # (with its tangent: a drop starts from it, icewall.solve.drop)
-            evaluation = problem.structure.with_tangent(current.evaluation, start.states)
             return Increment(kind, -float(current.u[problem.control_equation]),
                              current.load_factor, preload_factor, iteration - 1, disp_norm,
-                             current.load_norm, evaluation, current.u, forensics)
-        tangent = problem.structure.with_tangent(current.evaluation, start.states)
+                             current.load_norm, current.evaluation, current.u, forensics)
+        tangent = problem.structure.with_tangent(current.evaluation)
         matrix_at = tangent
         if iteration == 1 and last_increment is not None and _norm(last_increment) > 0.0:
             matrix_at = problem.structure.evaluate(
