@@ -55,6 +55,10 @@ PEERS_VENV ?= $(HOME)/.cache/bench-peers-venv
 bench: $(STAMP)  ## benchmarks, outside the test suite; tables printed, CSV in benchmarks/out
 	$(BIN)/python benchmarks/bench_concrete.py
 	$(BIN)/python benchmarks/bench_iteration.py
+	$(BIN)/python benchmarks/bench_iteration.py --name iteration_newton --backends superlu:COLAMD \
+	    --set analysis.scheme=newton --set materials.concrete.mode_rule_band=0.1 \
+	    --set materials.concrete.post_peak_strength=peak --set 'outputs.fields=[]' \
+	    --set loads.control.target=7.5
 	$(BIN)/python benchmarks/bench_scaling.py --backends superlu superlu:COLAMD
 	ICEWALL_SPARSE_SOLVER=auto ICEWALL_SUPERLU_ORDERING=COLAMD $(BIN)/python \
 	    benchmarks/bench_scaling.py --backends superlu:COLAMD --csv scaling_fast.csv

@@ -3,8 +3,8 @@ iteration / one bare sparse LU factorisation + two-RHS solve of the same iterati
 both measured in this one run (not part of the test run).
 
 Usage: python benchmarks/bench_iteration.py [--deck decks/cf4.yaml] [--set k=v ...]
-       [--sample-every 10] [--backends superlu pardiso]
-Writes benchmarks/out/iteration_phases.csv (one row per phase) and iteration_summary.csv.
+       [--sample-every 10] [--backends superlu pardiso] [--name iteration]
+Writes benchmarks/out/<name>_phases.csv (one row per phase) and <name>_summary.csv.
 """
 
 from __future__ import annotations
@@ -45,6 +45,7 @@ def main() -> None:
     parser.add_argument("--sample-every", type=int, default=10)
     parser.add_argument("--backends", nargs="+", default=None,
                         help="backends timed bare on the sampled matrices (default: installed)")
+    parser.add_argument("--name", default="iteration", help="prefix of the CSV files written")
     args = parser.parse_args()
     backends = tuple(args.backends or (sparse.available_backends() if sparse else ["superlu"]))
     loaded = load_deck(args.deck, args.overrides)
@@ -99,9 +100,10 @@ def main() -> None:
                                           "median_iterations_per_step_after_cracking",
                                           "peak_memory_mb")}], "run")
     summary.update(environment())
-    write_csv(OUT / "iteration_phases.csv", rows)
-    write_csv(OUT / "iteration_summary.csv", [summary])
-    print(f"\nwritten: {OUT / 'iteration_phases.csv'}, {OUT / 'iteration_summary.csv'}")
+    phases, summary_csv = OUT / f"{args.name}_phases.csv", OUT / f"{args.name}_summary.csv"
+    write_csv(phases, rows)
+    write_csv(summary_csv, [summary])
+    print(f"\nwritten: {phases}, {summary_csv}")
 
 
 if __name__ == "__main__":
