@@ -9,6 +9,10 @@ Definitions (deflection d = the control displacement, mm; load P in the run's lo
 * Peak: the largest load of the curve, its deflection and step (the first step if tied).
   ``peaked`` is False when the largest load is the last step: the run ended before any drop, so
   the peak is only a lower bound.
+* First peak: the largest load before the curve first falls FIRST_PEAK_SOFTENING (5 %) below
+  its running maximum (``first_peak_load``, ``deflection_at_first_peak``): the ultimate of a
+  curve with several humps, whose later humps depend on the path after a drop (docs/solver.md
+  item 29); the peak itself where the curve never softens that much.
 * ``residual_load_40``: P at d = 40 mm, linearly interpolated between the bracketing steps
   (specimens.md: the load at the end of the analysed range); None if the run stopped short.
 * ``residual_plateau``: the deflection-weighted mean load (trapezoidal integral / length) over
@@ -46,6 +50,7 @@ RESIDUAL_DEFLECTION = 40.0  # mm
 PLATEAU_OFFSET = 10.0  # mm past the peak
 PLATEAU_START_MIN = 20.0  # mm
 STIFFNESS_FRACTION = 0.30
+FIRST_PEAK_SOFTENING = 0.05  # fraction of the running maximum the curve falls by after it
 TENSION_PLATE = "bottom_plate"
 _EPS = 1e-9
 
@@ -59,6 +64,19 @@ def stroke_curve(d: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     d, p = np.asarray(d, float), np.asarray(p, float)
     keep = stroke_mask(d)
     return d[keep], p[keep]
+
+
+def first_maximum(p: np.ndarray, softening: float = FIRST_PEAK_SOFTENING) -> int:
+    """Index of the largest load before `p` first falls below (1 - softening) times its
+    running maximum (the first point at that maximum); of the largest load where it never
+    does. -1 for an empty curve."""
+    p = np.asarray(p, float)
+    if p.size == 0:
+        return -1
+    running = np.maximum.accumulate(p)
+    fallen = np.flatnonzero(p < (1.0 - softening) * running)
+    end = fallen[0] if fallen.size else p.size
+    return int(np.argmax(p[:end]))
 
 
 def stroke_mask(d: np.ndarray) -> np.ndarray:
@@ -230,12 +248,14 @@ def extract(source, *, residual_deflection: float = RESIDUAL_DEFLECTION,
     steps = np.asarray(hist["step"])[control][keep[1:]]
     k = int(np.argmax(p[1:])) + 1
     peak, d_peak, peak_step = float(p[k]), float(d[k]), int(steps[k - 1])
+    first = first_maximum(p)
     a = max(d_peak + PLATEAU_OFFSET, PLATEAU_START_MIN)
     res40 = _at(d, p, residual_deflection)
     plateau = _plateau(d, p, a, residual_deflection)
     out.update({
         "peak_load": peak, "deflection_at_peak": d_peak, "peak_step": peak_step,
         "peaked": bool(k < d.size - 1 and p[-1] < peak),
+        "first_peak_load": float(p[first]), "deflection_at_first_peak": float(d[first]),
         "final_deflection": float(d[-1]), "final_load": float(p[-1]),
         "residual_load_40": res40, "residual_deflection": residual_deflection,
         "residual_plateau": plateau,

@@ -26,6 +26,7 @@ def solver_label(solver: str | None) -> str:
 
 def summarize(path: str | os.PathLike) -> dict:
     """Key numbers of one analysis as a JSON-serialisable dict (None where there are no steps)."""
+    from icewall.analysis.extract import first_maximum, stroke_mask
     from icewall.analysis.mechanism import mechanism_check
     from icewall.post.ductility import result_ductility
 
@@ -45,7 +46,9 @@ def summarize(path: str | os.PathLike) -> dict:
         "path": os.fspath(path), "specimen": a.get("specimen"), "solver": solver,
         "status": status,
         "stop_reason": reason, "n_steps": int(len(h["step"])),
-        "max_load": None, "deflection_at_max_load": None, "final_load": None,
+        "max_load": None, "deflection_at_max_load": None,
+        # the largest load before the curve first softens by 5 % (icewall.analysis.extract)
+        "first_max_load": None, "deflection_at_first_max_load": None, "final_load": None,
         "final_deflection": None, "total_iterations": 0, "iterations_per_step_median": None,
         "iterations_per_step_max": None, "run_time_s": a.get("run_time_s"),
         "load_measure": a.get("load_measure"), "load_unit": a.get("load_unit"),
@@ -59,8 +62,12 @@ def summarize(path: str | os.PathLike) -> dict:
     if out["n_steps"]:
         load, defl, its = h["load"], h["control_displacement"], h["iterations"]
         i = int(np.argmax(load))  # first step at the peak
+        stroke = np.flatnonzero(stroke_mask(np.asarray(defl)))  # the recorded curve
+        first = stroke[first_maximum(np.asarray(load)[stroke])]
         out.update({
             "max_load": float(load[i]), "deflection_at_max_load": float(defl[i]),
+            "first_max_load": float(load[first]),
+            "deflection_at_first_max_load": float(defl[first]),
             "final_load": float(load[-1]), "final_deflection": float(defl[-1]),
             "total_iterations": int(its.sum()),
             "iterations_per_step_median": float(np.median(its)),
@@ -155,6 +162,17 @@ def _equilibrium_text(e: dict | None, jumped: bool) -> str:
             f"{e['scheme']}; {norms}")
 
 
+def _first_maximum_text(s: dict, unit: str) -> str:
+    """The first maximum, and whether the curve climbs past it later (a second hump)."""
+    first = s.get("first_max_load")
+    if first is None:
+        return "-"
+    text = f"{_num(first, unit)} at {_num(s.get('deflection_at_first_max_load'), 'mm')}"
+    if s.get("max_load") is not None and s["max_load"] > first:
+        text += " (before the curve first softens by 5 %; it climbs higher later)"
+    return text
+
+
 def format_summary(summary: dict) -> str:
     """Human-readable block of aligned ``key : value unit`` lines."""
     from icewall.analysis.mechanism import format_mechanism
@@ -176,6 +194,7 @@ def format_summary(summary: dict) -> str:
         ("steps", _num(s.get("n_steps"))),
         (load_label, _num(s.get("max_load"), lu)),
         ("deflection at max load", _num(s.get("deflection_at_max_load"), "mm")),
+        ("first maximum", _first_maximum_text(s, lu)),
         ("final load", _num(s.get("final_load"), lu)),
         ("final deflection", _num(s.get("final_deflection"), "mm")),
         ("total iterations", _num(s.get("total_iterations"))),

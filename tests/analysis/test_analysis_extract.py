@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from icewall.analysis.extract import extract
+from icewall.analysis.extract import extract, first_maximum
 from icewall.mesh.mesh import Mesh, Region
 from icewall.results import ResultWriter, StepRecord
 
@@ -48,6 +48,25 @@ def test_softening_curve(step, odd):
     assert r["residual_ratio_40"] == pytest.approx(0.6)
     assert r["initial_stiffness"] == pytest.approx(1.0)
     json.dumps(r)  # JSON-ready
+
+
+def test_the_first_peak_of_a_curve_with_two_humps():
+    """The first maximum is the largest load before the curve first falls 5 % below its
+    running maximum (CF-4's second hump: docs/solver.md item 29); on one hump it is the
+    peak, and a dip of less than 5 % does not end it."""
+    d = np.arange(1.0, 41.0)
+    two = np.interp(d, [0.0, 7.0, 8.0, 12.0, 14.0, 40.0], [0.0, 6.25, 5.9, 6.46, 2.0, 1.0])
+    r = extract({"deflection": d, "load": two})
+    assert r["peak_load"] == pytest.approx(6.46) and r["deflection_at_peak"] == 12.0
+    assert r["first_peak_load"] == pytest.approx(6.25)
+    assert r["deflection_at_first_peak"] == 7.0
+    dip = np.interp(d, [0.0, 7.0, 8.0, 12.0, 14.0, 40.0], [0.0, 6.25, 6.0, 6.46, 2.0, 1.0])
+    assert extract({"deflection": d, "load": dip})["first_peak_load"] == pytest.approx(6.46)
+    one = extract(softening(1.0, 40.0, False))
+    assert one["first_peak_load"] == one["peak_load"]
+    assert first_maximum(np.array([1.0, 3.0, 2.0, 4.0])) == 1  # 2 < 0.95 * 3
+    assert first_maximum(np.array([1.0, 2.0, 3.0])) == 2  # never softens: the largest
+    assert first_maximum(np.array([])) == -1
 
 
 def test_plateau_window_follows_a_late_peak():

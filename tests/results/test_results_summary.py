@@ -140,3 +140,26 @@ def test_summary_says_whether_every_step_is_a_converged_equilibrium(tmp_path):
                     "analysis.tolerance_displacement=1e-3"], [9e-4])
     assert ("largest load norm 9e-05, displacement norm 3e-05 (the stored deck does not read: "
             "tolerances unknown)") in result("no_deck.h5", [], [9e-5], deck="deck")
+
+
+def test_summary_gives_the_first_maximum_and_says_when_the_curve_climbs_past_it(tmp_path):
+    """A curve with a second, higher hump (docs/solver.md item 29): the first maximum is the
+    largest load before the curve first softens by 5 %, and the summary says that it climbs
+    higher later; on a single hump the two are the same and nothing is added."""
+    def result(name, loads):
+        path = tmp_path / name
+        w = ResultWriter(path, deck_text="", deck_path="cf4.yaml", mesh=one_cell_mesh(),
+                         attrs={"specimen": "CF-4", "load_measure": "w", "load_unit": "MPa"})
+        for i, load in enumerate(loads):
+            w.write_step(StepRecord(i + 1, 1.0 + i, load, 1.0, 5, 1e-5, 1e-5, 0.1))
+        w.finish("completed", "")
+        return summarize(path)
+
+    two = result("two.h5", [3.0, 6.25, 5.9, 6.46, 2.0])
+    assert two["first_max_load"] == 6.25 and two["deflection_at_first_max_load"] == 2.0
+    assert two["max_load"] == 6.46
+    assert ("first maximum          : 6.25 MPa at 2 mm (before the curve first softens by "
+            "5 %; it climbs higher later)") in format_summary(two)
+    one = result("one.h5", [3.0, 6.25, 5.0])
+    assert one["first_max_load"] == one["max_load"] == 6.25
+    assert "first maximum          : 6.25 MPa at 2 mm\n" in format_summary(one)
