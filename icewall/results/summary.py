@@ -47,7 +47,7 @@ def summarize(path: str | os.PathLike) -> dict:
         "status": status,
         "stop_reason": reason, "n_steps": int(len(h["step"])),
         "max_load": None, "deflection_at_max_load": None,
-        # the largest load before the curve first softens by 5 % (icewall.analysis.extract)
+        # the largest load before the curve first softens (icewall.analysis.extract)
         "first_max_load": None, "deflection_at_first_max_load": None, "final_load": None,
         "final_deflection": None, "total_iterations": 0, "iterations_per_step_median": None,
         "iterations_per_step_max": None, "run_time_s": a.get("run_time_s"),
@@ -164,12 +164,15 @@ def _equilibrium_text(e: dict | None, jumped: bool) -> str:
 
 def _first_maximum_text(s: dict, unit: str) -> str:
     """The first maximum, and whether the curve climbs past it later (a second hump)."""
+    from icewall.analysis.extract import FIRST_PEAK_SOFTENING
+
     first = s.get("first_max_load")
     if first is None:
         return "-"
     text = f"{_num(first, unit)} at {_num(s.get('deflection_at_first_max_load'), 'mm')}"
     if s.get("max_load") is not None and s["max_load"] > first:
-        text += " (before the curve first softens by 5 %; it climbs higher later)"
+        text += (f" (before the curve first softens by {100 * FIRST_PEAK_SOFTENING:g} %; it "
+                 "climbs higher later)")
     return text
 
 
