@@ -16,9 +16,7 @@ import math
 import os
 import sys
 import time
-from dataclasses import dataclass, field
 from datetime import datetime
-from numbers import Integral, Real
 
 import h5py
 import numpy as np
@@ -34,6 +32,13 @@ from icewall.results.output_safety import (
     is_disk_full,
     refuse_symlink,
 )
+from icewall.results.step_record import (
+    CORE_COLUMNS,
+    StepRecord,
+    check_name,
+    history_value,
+    validate_step,
+)
 
 FORMAT, FORMAT_VERSION = "icewall-result", 1
 PARTIAL_SUFFIX = ".partial"
@@ -42,76 +47,8 @@ FLOAT_FILL = math.nan  # same for a float column (the only NaN ever written)
 RESERVED_ATTRS = ("format", "format_version", "software_version", "units", "length_unit",
                   "force_unit", "stress_unit", "created", "status", "stop_reason", "run_time_s",
                   "n_steps", "resumed_at")
-# Core history columns: name -> (dtype, unit or None, description).
-CORE_COLUMNS = {
-    "step": ("i8", None, "step number, 1-based"),
-    "control_displacement": ("f8", "mm", "control displacement, positive in load direction"),
-    "load": ("f8", None, "load in the deck's load measure (root attrs load_measure, load_unit)"),
-    "load_factor": ("f8", None, "load factor"),
-    "iterations": ("i8", None, "equilibrium iterations of the step"),
-    "displacement_norm": ("f8", None, "final displacement convergence norm"),
-    "load_norm": ("f8", None, "final out-of-balance load norm"),
-    "wall_time": ("f8", "s", "wall-clock time since the start of the analysis"),
-}
 GAUSS_UNITS = {"stress": "MPa", "strain": "1"}
 STEP_COMPRESSION: dict = {}  # e.g. {"compression": "lzf"}; see docs/hdf5_layout.md (none chosen)
-
-
-@dataclass
-class StepRecord:
-    """One converged (or final) load step."""
-
-    step: int
-    control_displacement: float
-    load: float
-    load_factor: float
-    iterations: int
-    displacement_norm: float
-    load_norm: float
-    wall_time: float
-    displacement: np.ndarray | None = None  # (n_nodes, 2) mm, or None if not stored
-    gauss: dict[str, np.ndarray] = field(default_factory=dict)  # name -> (n_el, n_qp, k)
-    scalars: dict[str, float | int] = field(default_factory=dict)  # extra history columns
-    # other per-step fields, e.g. "interface/state" (n_pairs,): stored with the fields
-    arrays: dict[str, np.ndarray] = field(default_factory=dict)
-    # per-iteration convergence forensics (1-D), stored for every step under /forensics
-    forensics: dict[str, np.ndarray] = field(default_factory=dict)
-
-
-def _check_name(name: str, what: str) -> None:
-    if not isinstance(name, str) or not name or "/" in name or name in (".", ".."):
-        raise ValueError(f"invalid {what} name {name!r} (non-empty, no '/')")
-
-
-def _finite_array(name: str, arr, shape: tuple | None = None) -> np.ndarray:
-    a = np.asarray(arr)
-    if a.dtype.kind not in "biuf":
-        raise ValueError(f"{name}: unsupported dtype {a.dtype}")
-    if a.dtype.kind == "f" and not np.isfinite(a).all():
-        raise ValueError(f"{name}: contains NaN or inf")
-    if shape is not None and (a.ndim != len(shape) or any(
-            s is not None and s != n for s, n in zip(shape, a.shape, strict=True))):
-        want = tuple("*" if s is None else s for s in shape)
-        raise ValueError(f"{name}: shape {a.shape}, expected {want}")
-    return a
-
-
-def _scalar(name: str, value, integer: bool | None = None) -> int | float:
-    """Validate one history value; integer=True/False forces the column's kind."""
-    if isinstance(value, bool | np.bool_):
-        value = int(value)
-    if isinstance(value, Integral) and integer is not False:
-        return int(value)
-    if not isinstance(value, Real):
-        raise ValueError(f"{name}: not a real number: {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{name}: non-finite value {value}")
-    if integer:
-        if not value.is_integer():
-            raise ValueError(f"{name}: integer column got {value}")
-        return int(value)
-    return value
 
 
 def _write_mesh(g: h5py.Group, mesh: Mesh) -> None:
@@ -126,7 +63,7 @@ def _write_mesh(g: h5py.Group, mesh: Mesh) -> None:
     for grp, sets in (("node_sets", mesh.node_sets), ("edge_sets", mesh.edge_sets)):
         sg = g.create_group(grp)
         for name, ids in sets.items():
-            _check_name(name, grp[:-1].replace("_", " "))
+            check_name(name, grp[:-1].replace("_", " "))
             sg.create_dataset(name, data=np.asarray(ids, dtype=np.int64))
     i = g.create_group("interface")
     i.create_dataset("pairs", data=np.asarray(mesh.interface_pairs, dtype=np.int64).reshape(-1, 2))
@@ -189,11 +126,11 @@ class ResultWriter:
         self._broken = False
         attrs = dict(attrs or {})
         for key, val in attrs.items():
-            _check_name(key, "attribute")
+            check_name(key, "attribute")
             if key in RESERVED_ATTRS:
                 raise ValueError(f"attribute {key!r} is reserved")
             if not isinstance(val, str):
-                attrs[key] = _scalar(f"attrs[{key!r}]", val)
+                attrs[key] = history_value(f"attrs[{key!r}]", val)
         check_writable(self.path)
         self._lock, self._own_lock = _take_lock(self.path, lock)
         try:
@@ -315,45 +252,14 @@ class ResultWriter:
         f.flush()
 
     # -- writing -----------------------------------------------------------------------------
-    def _validate(self, rec: StepRecord) -> tuple[dict, dict, dict]:
-        core = {name: _scalar(name, getattr(rec, name), integer=dtype == "i8")
-                for name, (dtype, _, _) in CORE_COLUMNS.items()}
-        if core["step"] < 1 or core["step"] <= self._last_step:
-            raise ValueError(f"step: {core['step']} is not > previous step {self._last_step}")
-        arrays = {}
-        if rec.displacement is not None:
-            arrays["displacement"] = _finite_array("displacement", rec.displacement,
-                                                   (self._n_nodes, 2))
-        for name, arr in rec.gauss.items():
-            _check_name(name, "gauss field")
-            arrays["gauss/" + name] = _finite_array(f"gauss[{name!r}]", arr,
-                                                    (self._n_cells, None, None))
-        for name, arr in rec.arrays.items():
-            parts = name.split("/")
-            if len(parts) > 2 or parts[0] in ("gauss", "displacement"):
-                raise ValueError(f"arrays[{name!r}]: use 'group/name' outside gauss/")
-            for part in parts:
-                _check_name(part, "array")
-            arrays[name] = _finite_array(f"arrays[{name!r}]", arr)
-        forensics = {}
-        for name, arr in rec.forensics.items():
-            _check_name(name, "forensics array")
-            forensics[name] = _finite_array(f"forensics[{name!r}]", arr, (None,))
-        extra = {}
-        for name, val in rec.scalars.items():
-            _check_name(name, "history column")
-            if name in CORE_COLUMNS:
-                raise ValueError(f"scalars[{name!r}]: clashes with a core history column")
-            extra[name] = _scalar(f"scalars[{name!r}]", val, self._columns.get(name))
-        return core, arrays, extra, forensics
-
     def write_step(self, record: StepRecord) -> None:
         """Validate the whole record (ValueError names the bad field), then append and flush."""
         if self._done:
             raise RuntimeError("write_step() after finish()")
         if self._broken:
             raise ResultError(f"{self.partial_path}: an earlier write failed")
-        core, arrays, extra, forensics = self._validate(record)
+        core, arrays, extra, forensics = validate_step(record, self._last_step, self._n_nodes,
+                                                       self._n_cells, self._columns)
         need = sum(a.nbytes for a in (*arrays.values(), *forensics.values()))
         need += 4096 * (len(arrays) + len(forensics) + len(extra) + len(CORE_COLUMNS))
         try:
