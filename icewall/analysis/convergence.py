@@ -18,7 +18,8 @@ exactly). A level equal to the deck's own setting is the *base* run, made once a
 Runs go through the sweep machinery (icewall.analysis.sweep: process pool, resumable, one HDF5
 per run in OUT) with ``outputs.fields=[]`` (history only) before any --set. Each run's CPU time
 is stamped in its file (``cpu_time_s``); cost is CPU time (wall time on a shared machine says
-more about the neighbours). Quantities (icewall.analysis.extract): peak load, its deflection,
+more about the neighbours). Quantities (icewall.analysis.extract): peak load, its deflection, the
+first maximum (the largest load before the curve first softens by 5 %) and its deflection,
 residual load (at 40 mm, the thesis' residual, or at the deck's target if that is shorter) and
 the whole curve; error estimates: icewall.analysis.convergence_table.
 
@@ -59,11 +60,12 @@ QUICK_LADDER = {"families": {
 FIXED = ("outputs.fields=[]",)
 H_KINDS = ("value", "inverse", "mesh")
 COLUMNS = ("family", "value", "h", "run", "status", "stop_reason", "cpu_s", "wall_s",
-           "iterations", "steps", "elements", "peak", "defl_peak", "residual", "residual_at",
-           "unit", "reference",
-           "err_peak", "err_defl_peak", "err_residual", "err_curve", "rich_err_peak",
-           "rich_err_residual", "test_err_peak", "test_err_residual", "total_err_peak",
-           "total_err_residual", "total_err_curve")
+           "iterations", "steps", "elements", "peak", "defl_peak", "first_peak",
+           "defl_first_peak", "residual", "residual_at", "unit", "reference",
+           "err_peak", "err_defl_peak", "err_first_peak", "err_defl_first_peak",
+           "err_residual", "err_curve", "rich_err_peak", "rich_err_first_peak",
+           "rich_err_residual", "test_err_peak", "test_err_first_peak", "test_err_residual",
+           "total_err_peak", "total_err_first_peak", "total_err_residual", "total_err_curve")
 
 
 @dataclass(frozen=True)
@@ -195,6 +197,8 @@ def measure_run(path: str, residual_at: float = RESIDUAL_DEFLECTION) -> dict:
             "iterations": int(hist["iterations"].sum()), "steps": int(d.size),
             "elements": int(mesh.n_cells), "h_mesh": float(math.sqrt(area / core.sum())),
             "peak": fig.get("peak_load"), "defl_peak": fig.get("deflection_at_peak"),
+            "first_peak": fig.get("first_peak_load"),
+            "defl_first_peak": fig.get("deflection_at_first_peak"),
             "residual": fig.get("residual_load_40"), "residual_at": residual_at,
             "curve": curve if control.any() else None}
 
@@ -237,8 +241,9 @@ def build_rows(levels: list[dict], results: dict[str, dict], deck_path: str, bas
     ct.total_errors(rows, base)
     tests = _test_values(next((r["specimen"] for r in rows if r["specimen"]), None), deck_path)
     for row in rows:
-        for q in ("peak", "residual"):
-            row[f"test_err_{q}"] = ct.relative_error(row[q], tests[q]) if row["usable"] else None
+        for q, test in (("peak", "peak"), ("first_peak", "peak"), ("residual", "residual")):
+            row[f"test_err_{q}"] = (ct.relative_error(row[q], tests[test]) if row["usable"]
+                                    else None)
     return rows, families
 
 
@@ -284,8 +289,9 @@ def plot(path: str, rows: list[dict], title: str) -> bool:
         import matplotlib.pyplot as plt
     except ImportError:
         return False
-    fig, axes = plt.subplots(1, len(ct.QUANTITIES), figsize=(10, 3.4), layout="constrained")
-    labels = {"peak": "peak load", "residual": "residual load", "curve": "whole curve"}
+    fig, axes = plt.subplots(1, len(ct.QUANTITIES), figsize=(13, 3.4), layout="constrained")
+    labels = {"peak": "peak load", "first_peak": "first maximum", "residual": "residual load",
+              "curve": "whole curve"}
     families = list(dict.fromkeys(r["family"] for r in rows))
     for ax, q in zip(axes, ct.QUANTITIES, strict=True):
         for i, family in enumerate(families):

@@ -4,7 +4,9 @@ report.
 
 A *row* is one run of one family (dict): ``family``, ``run``, ``h`` (the family's refinement
 measure, smaller = finer), ``usable`` (completed: stopped or failed runs get no error), ``cost``
-(CPU s) and the quantities ``peak``, ``defl_peak``, ``residual`` and ``curve`` ((d, P) arrays).
+(CPU s) and the quantities ``peak``, ``defl_peak``, ``first_peak`` (the largest load before
+the curve first softens by 5 %, icewall.analysis.extract.first_maximum), ``defl_first_peak``,
+``residual`` and ``curve`` ((d, P) arrays).
 Errors are relative, signed for the scalars ((ours - reference) / |reference|); the curve
 error is the RMS load difference over the common deflection range divided by the reference
 peak. The deck's own setting (the *base* run) is a level of every family; the error of a run
@@ -18,9 +20,9 @@ import math
 
 import numpy as np
 
-SCALARS = ("peak", "defl_peak", "residual")
-QUANTITIES = ("peak", "residual", "curve")  # the quantities the estimates and the Pareto use
-RICHARDSON_QUANTITIES = ("peak", "residual")
+SCALARS = ("peak", "defl_peak", "first_peak", "defl_first_peak", "residual")
+QUANTITIES = ("peak", "first_peak", "residual", "curve")  # what the estimates and Pareto use
+RICHARDSON_QUANTITIES = ("peak", "first_peak", "residual")
 ORDER_RANGE = (0.5, 5.0)  # a sensible observed order of convergence
 MIN_RATIO = 1.2  # smallest refinement ratio h_coarse / h_fine between Richardson runs
 THRESHOLDS = (0.10, 0.05, 0.02)
@@ -179,12 +181,15 @@ def format_report(rows: list[dict], families: dict, pareto: list[dict]) -> str:
         return "-" if v is None else f"{100 * v:+.1f}%"
 
     out = [f"{'family':<13}{'value':>8}  {'status':<9}{'cpu_s':>7}{'iter':>6}{'peak':>10}"
-           f"{'residual':>10}{'e_peak':>8}{'e_res':>8}{'e_curve':>8}{'test_pk':>8}{'test_res':>9}"]
+           f"{'first_pk':>10}{'residual':>10}{'e_peak':>8}{'e_first':>8}{'e_res':>8}"
+           f"{'e_curve':>8}{'test_pk':>8}{'test_res':>9}"]
     for r in rows:
-        num = [f"{r[c]:.4g}" if r[c] is not None else "-" for c in ("peak", "residual")]
+        num = [f"{r[c]:.4g}" if r[c] is not None else "-"
+               for c in ("peak", "first_peak", "residual")]
         out.append(f"{r['family']:<13}{r['value']:>8}  {r['status']:<9}"
                    f"{r['cost'] or 0:>7.1f}{r['iterations'] or 0:>6}{num[0]:>10}{num[1]:>10}"
-                   f"{pct(r['err_peak']):>8}{pct(r['err_residual']):>8}"
+                   f"{num[2]:>10}{pct(r['err_peak']):>8}{pct(r['err_first_peak']):>8}"
+                   f"{pct(r['err_residual']):>8}"
                    f"{pct(r['err_curve']).lstrip('+'):>8}{pct(r['test_err_peak']):>8}"
                    f"{pct(r['test_err_residual']):>9}")
     out += [f"{r['run']}: {r['status']}: {r['stop_reason']}" for r in rows

@@ -62,11 +62,30 @@ def test_richardson_not_applicable(h, f, why):
     assert r["note"].startswith("n/a") and why in r["note"]
 
 
-def row(family, run, h, peak, cost=1.0, status="completed", value=None):
+def row(family, run, h, peak, cost=1.0, status="completed", value=None, first_peak=None):
     d = np.array([0.0, 10.0, 40.0])
     return {"family": family, "run": run, "h": h, "value": value or str(h), "status": status,
             "usable": status == "completed", "cost": cost, "peak": peak, "defl_peak": 10.0,
+            "first_peak": peak if first_peak is None else first_peak, "defl_first_peak": 10.0,
             "residual": 0.5 * peak, "curve": (d, np.array([0.0, peak, 0.5 * peak]))}
+
+
+def test_the_first_maximum_gets_errors_of_its_own():
+    """A second hump that moves with the step (the largest load) while the first maximum
+    stays: the peak's errors are large, the first maximum's small, and the Pareto choice
+    for the first maximum is the cheapest run."""
+    rows = [row("step", "s1", 1.0, 6.46, cost=1.0, first_peak=6.25),
+            row("step", "s05", 0.5, 6.10, cost=2.0, first_peak=6.26),
+            row("step", "s025", 0.25, 6.30, cost=4.0, first_peak=6.255)]
+    ct.family_errors(rows)
+    ct.total_errors(rows, "s1")
+    by = {r["run"]: r for r in rows}
+    assert by["s1"]["err_peak"] == pytest.approx(0.16 / 6.30)
+    assert by["s1"]["err_first_peak"] == pytest.approx(-0.005 / 6.255)
+    assert by["s05"]["err_defl_first_peak"] == 0.0
+    table = {(p["threshold"], p["quantity"]): p for p in ct.pareto_rows(rows)}
+    assert table[0.02, "first_peak"]["run"] == "s1"
+    assert table[0.02, "peak"]["run"] == "s025"
 
 
 def test_family_errors_against_finest_usable_run_and_richardson():
@@ -198,6 +217,8 @@ def test_quick_ladder_end_to_end(tmp_path, monkeypatch):
     base = next(r for r in rows if r["run"] == "cf4__base")
     assert float(base["peak"]) == pytest.approx(summarize(out / "cf4__base.h5")["max_load"])
     assert float(base["test_err_peak"]) == pytest.approx(float(base["peak"]) / 4.91 - 1, rel=1e-4)
+    assert float(base["first_peak"]) == pytest.approx(
+        summarize(out / "cf4__base.h5")["first_max_load"])
     assert int(base["elements"]) > int(rows[0]["elements"])  # 75 mm is the finer mesh
     for name in ("families", "pareto", "curves"):
         assert (out / f"convergence_{name}.csv").stat().st_size > 0
