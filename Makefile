@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DECK ?= decks/cf4.yaml
 
-.PHONY: run test lint stability validate compare convergence cylinder bench schema clean
+.PHONY: run test lint stability validate compare convergence convergence-newton cylinder bench schema clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -46,6 +46,17 @@ $(VENV)/.plot: $(STAMP)
 convergence: $(VENV)/.plot  ## CF-4 and TF-1 over a discretisation ladder (long): results/convergence
 	$(BIN)/icewall convergence decks/cf4.yaml -j 2 -o results/convergence/cf4
 	$(BIN)/icewall convergence decks/tf1.yaml -j 2 -o results/convergence/tf1
+
+# the converged scheme with the readings its runs in docs/solver.md use (items 18, 22)
+NEWTON := --set analysis.scheme=newton --set materials.concrete.mode_rule_band=0.1 \
+	--set materials.concrete.post_peak_strength=peak
+NEWTON_LADDER := --ladder docs/convergence/newton_ladder.yaml
+
+convergence-newton: $(VENV)/.plot  ## the Newton scheme's own error (step, tolerances) on CF-4 and TF-1 (long)
+	$(BIN)/icewall convergence decks/cf4.yaml $(NEWTON_LADDER) $(NEWTON) \
+		--set loads.control.target=10.5 -j 2 -o results/convergence-newton/cf4
+	$(BIN)/icewall convergence decks/tf1.yaml $(NEWTON_LADDER) $(NEWTON) \
+		--set loads.control.target=8 -j 2 -o results/convergence-newton/tf1
 
 cylinder: $(STAMP)  ## thesis Appendix A: 24 axisymmetric cylinders, fit of alpha_c, n (long)
 	$(BIN)/python -m icewall.analysis.cylinder -j 2 -o results/cylinder
