@@ -61,7 +61,8 @@ FIXED = ("outputs.fields=[]",)
 H_KINDS = ("value", "inverse", "mesh")
 COLUMNS = ("family", "value", "h", "run", "status", "stop_reason", "cpu_s", "wall_s",
            "iterations", "steps", "elements", "peak", "defl_peak", "first_peak",
-           "defl_first_peak", "residual", "residual_at", "unit", "reference",
+           "defl_first_peak", "first_peak_settled", "residual", "residual_at", "unit",
+           "reference",
            "err_peak", "err_defl_peak", "err_first_peak", "err_defl_first_peak",
            "err_residual", "err_curve", "rich_err_peak", "rich_err_first_peak",
            "rich_err_residual", "test_err_peak", "test_err_first_peak", "test_err_residual",
@@ -199,6 +200,7 @@ def measure_run(path: str, residual_at: float = RESIDUAL_DEFLECTION) -> dict:
             "peak": fig.get("peak_load"), "defl_peak": fig.get("deflection_at_peak"),
             "first_peak": fig.get("first_peak_load"),
             "defl_first_peak": fig.get("deflection_at_first_peak"),
+            "first_peak_settled": fig.get("first_peak_settled"),
             "residual": fig.get("residual_load_40"), "residual_at": residual_at,
             "curve": curve if control.any() else None}
 
@@ -234,6 +236,8 @@ def build_rows(levels: list[dict], results: dict[str, dict], deck_path: str, bas
             except (ResultError, OSError, KeyError, ValueError) as exc:
                 row["stop_reason"] = f"unreadable result: {exc}"
         row["usable"] = row["status"] == "completed" and row["peak"] is not None
+        row["usable_first_peak"] = row["usable"] or (
+            row["status"] == "stopped" and bool(row.get("first_peak_settled")))
         row["h"] = row.get("h_mesh") if level["h_kind"] == "mesh" else level["nominal"]
         row["cost"] = row["cpu_s"] if row["cpu_s"] is not None else row["wall_s"]
         rows.append(row)
@@ -242,8 +246,8 @@ def build_rows(levels: list[dict], results: dict[str, dict], deck_path: str, bas
     tests = _test_values(next((r["specimen"] for r in rows if r["specimen"]), None), deck_path)
     for row in rows:
         for q, test in (("peak", "peak"), ("first_peak", "peak"), ("residual", "residual")):
-            row[f"test_err_{q}"] = (ct.relative_error(row[q], tests[test]) if row["usable"]
-                                    else None)
+            row[f"test_err_{q}"] = (ct.relative_error(row[q], tests[test])
+                                    if ct.usable_for(row, q) else None)
     return rows, families
 
 
@@ -264,7 +268,8 @@ def write_tables(outdir: str, rows: list[dict], families: dict, pareto: list[dic
             writer.writerows([_cell(r.get(c)) for c in fields] for r in records)
 
     write("convergence_runs.csv", COLUMNS, rows)
-    fam = [{"family": name, "reference": f["reference"],
+    fam = [{"family": name, "reference": (f["first_peak_reference"] if q == "first_peak"
+                                          else f["reference"]),
             "finer_unusable": " ".join(f["finer_unusable"]), "quantity": q,
             "richardson_runs": " ".join(r["runs"]), "order": r["order"],
             "extrapolated": r["extrapolated"], "note": r["note"]}

@@ -3,7 +3,8 @@ extrapolation, summed over families, the cheapest runs within an error (Pareto);
 report.
 
 A *row* is one run of one family (dict): ``family``, ``run``, ``h`` (the family's refinement
-measure, smaller = finer), ``usable`` (completed: stopped or failed runs get no error), ``cost``
+measure, smaller = finer), ``usable`` (completed: stopped or failed runs get no error, except
+in the first maximum where ``usable_first_peak`` says the run stopped after it), ``cost``
 (CPU s) and the quantities ``peak``, ``defl_peak``, ``first_peak`` (the largest load before
 the curve first softens by 5 %, icewall.analysis.extract.first_maximum), ``defl_first_peak``,
 ``residual`` and ``curve`` ((d, P) arrays).
@@ -23,6 +24,7 @@ import numpy as np
 SCALARS = ("peak", "defl_peak", "first_peak", "defl_first_peak", "residual")
 QUANTITIES = ("peak", "first_peak", "residual", "curve")  # what the estimates and Pareto use
 RICHARDSON_QUANTITIES = ("peak", "first_peak", "residual")
+FIRST_PEAK_QUANTITIES = ("first_peak", "defl_first_peak")
 ORDER_RANGE = (0.5, 5.0)  # a sensible observed order of convergence
 MIN_RATIO = 1.2  # smallest refinement ratio h_coarse / h_fine between Richardson runs
 THRESHOLDS = (0.10, 0.05, 0.02)
@@ -84,34 +86,51 @@ def richardson(h, f) -> dict:
     return {"order": p, "extrapolated": f[0] - e21 / (r21**p - 1.0), "note": ""}
 
 
+def usable_for(row: dict, quantity: str) -> bool:
+    """Whether `row` has `quantity`: a completed run has every one; a run that stopped after
+    its curve fell 5 % below its first maximum (``usable_first_peak``) has the first maximum
+    and its deflection too, whatever stopped it later."""
+    if quantity in FIRST_PEAK_QUANTITIES:
+        return bool(row.get("usable_first_peak", row["usable"]))
+    return bool(row["usable"])
+
+
+def _finest(members: list[dict], quantity: str) -> list[dict]:
+    return sorted((r for r in members if usable_for(r, quantity) and r["h"] is not None),
+                  key=lambda r: r["h"])
+
+
 def family_errors(rows: list[dict]) -> dict:
-    """Fill each row's errors against its family's finest usable run (``err_*``, ``reference``)
-    and its Richardson extrapolation (``rich_err_*``). Returns per family: {reference,
+    """Fill each row's errors against its family's finest usable run (``err_*``, ``reference``;
+    for the first maximum, the finest run that has it: ``usable_for``) and its Richardson
+    extrapolation (``rich_err_*``). Returns per family: {reference, first_peak_reference,
     finer_unusable (finer runs that did not complete: the reference is then not the finest
     level), richardson: {quantity: richardson dict with the runs used}}."""
     out = {}
     for family in dict.fromkeys(r["family"] for r in rows):
         members = [r for r in rows if r["family"] == family]
-        usable = sorted((r for r in members if r["usable"] and r["h"] is not None),
-                        key=lambda r: r["h"])
-        ref = usable[0] if usable else None
+        usable = {q: _finest(members, q) for q in (*SCALARS, "curve")}
+        ref = usable["peak"][0] if usable["peak"] else None
         for row in members:
             row["reference"] = ref["run"] if ref else None
-            ok = ref is not None and row["usable"]
             for q in SCALARS:
-                row[f"err_{q}"] = relative_error(row[q], ref[q]) if ok else None
+                own = usable[q][0] if usable[q] else None
+                row[f"err_{q}"] = (relative_error(row[q], own[q])
+                                   if own is not None and usable_for(row, q) else None)
+            ok = ref is not None and row["usable"]
             row["err_curve"] = curve_error(row["curve"], ref["curve"]) if ok else None
         finer = [r["run"] for r in members if not r["usable"] and
                  (ref is None or r["h"] is None or r["h"] < ref["h"])]
+        first = usable["first_peak"][0]["run"] if usable["first_peak"] else None
         out[family] = {"reference": ref["run"] if ref else None, "finer_unusable": finer,
-                       "richardson": {}}
+                       "first_peak_reference": first, "richardson": {}}
         for q in RICHARDSON_QUANTITIES:
-            three = usable[:3]
+            three = usable[q][:3]
             rich = richardson([r["h"] for r in three], [r[q] for r in three])
             out[family]["richardson"][q] = {**rich, "runs": [r["run"] for r in three]}
             for row in members:
                 row[f"rich_err_{q}"] = (relative_error(row[q], rich["extrapolated"])
-                                        if row["usable"] else None)
+                                        if usable_for(row, q) else None)
     return out
 
 
@@ -155,7 +174,8 @@ def measured_points(rows: list[dict], quantity: str) -> list[tuple[float, float,
     seen: dict[str, tuple[float, float, str]] = {}
     for row in rows:
         err = _error_of({q: row[f"total_err_{q}"] for q in QUANTITIES}, quantity)
-        if row["usable"] and row["cost"] is not None and err is not None:
+        has = row["usable"] if quantity == "all" else usable_for(row, quantity)
+        if has and row["cost"] is not None and err is not None:
             seen[row["run"]] = (float(row["cost"]), err, row["run"])
     return list(seen.values())
 
@@ -200,9 +220,12 @@ def format_report(rows: list[dict], families: dict, pareto: list[dict]) -> str:
         note = f"; finer, not completed: {', '.join(f['finer_unusable'])}" \
             if f["finer_unusable"] else ""
         out.append(f"  {name:<13}reference {f['reference']}{note}")
+        if f.get("first_peak_reference") not in (None, f["reference"]):
+            out.append(f"  {'':<13}first maximum: reference {f['first_peak_reference']} "
+                       "(stopped after it)")
         for q, r in f["richardson"].items():
             what = r["note"] or f"order {r['order']:.2f}, extrapolated {r['extrapolated']:.5g}"
-            out.append(f"  {'':<13}{q:<10}{what}")
+            out.append(f"  {'':<13}{q:<11}{what}")
     out.append("Cheapest run within an error, estimated against the finest run of every family "
                "(CPU s, estimated error):")
     for p in pareto:

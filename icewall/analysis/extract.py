@@ -12,7 +12,8 @@ Definitions (deflection d = the control displacement, mm; load P in the run's lo
 * First peak: the largest load before the curve first falls FIRST_PEAK_SOFTENING (5 %) below
   its running maximum (``first_peak_load``, ``deflection_at_first_peak``): the ultimate of a
   curve with several humps, whose later humps depend on the path after a drop (docs/solver.md
-  item 29); the peak itself where the curve never softens that much.
+  item 29); the peak itself where the curve never softens that much. ``first_peak_settled``:
+  the curve does fall that far after it (a run stopped later still has this figure).
 * ``residual_load_40``: P at d = 40 mm, linearly interpolated between the bracketing steps
   (specimens.md: the load at the end of the analysed range); None if the run stopped short.
 * ``residual_plateau``: the deflection-weighted mean load (trapezoidal integral / length) over
@@ -256,6 +257,7 @@ def extract(source, *, residual_deflection: float = RESIDUAL_DEFLECTION,
         "peak_load": peak, "deflection_at_peak": d_peak, "peak_step": peak_step,
         "peaked": bool(k < d.size - 1 and p[-1] < peak),
         "first_peak_load": float(p[first]), "deflection_at_first_peak": float(d[first]),
+        "first_peak_settled": bool(np.any(p[first:] < (1 - FIRST_PEAK_SOFTENING) * p[first])),
         "final_deflection": float(d[-1]), "final_load": float(p[-1]),
         "residual_load_40": res40, "residual_deflection": residual_deflection,
         "residual_plateau": plateau,

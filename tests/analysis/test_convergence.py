@@ -88,6 +88,28 @@ def test_the_first_maximum_gets_errors_of_its_own():
     assert table[0.02, "peak"]["run"] == "s025"
 
 
+def test_a_run_stopped_after_its_first_maximum_is_that_figure_s_reference():
+    """The finest tolerance stopped in a drop after its first maximum: it has no peak or
+    residual error, but it is the first maximum's reference; a run stopped before its first
+    maximum settled has none."""
+    rows = [row("tol", "t3", 1e-3, 6.46, first_peak=6.219),
+            row("tol", "t4", 1e-4, 6.30, first_peak=6.255),
+            row("tol", "t6", 1e-6, 6.27, first_peak=6.252, status="stopped"),
+            row("tol", "t8", 1e-8, 6.10, first_peak=6.10, status="stopped")]
+    rows[2]["usable_first_peak"] = True
+    rows[3]["usable_first_peak"] = False
+    family = ct.family_errors(rows)["tol"]
+    by = {r["run"]: r for r in rows}
+    assert family["reference"] == "t4" and family["first_peak_reference"] == "t6"
+    assert by["t3"]["err_peak"] == pytest.approx(0.16 / 6.30)
+    assert by["t3"]["err_first_peak"] == pytest.approx(-0.033 / 6.252)
+    assert by["t4"]["err_first_peak"] == pytest.approx(0.003 / 6.252)
+    assert by["t6"]["err_first_peak"] == 0.0 and by["t6"]["err_peak"] is None
+    assert by["t8"]["err_first_peak"] is None
+    assert family["richardson"]["first_peak"]["runs"] == ["t6", "t4", "t3"]
+    assert ct.usable_for(by["t6"], "defl_first_peak") and not ct.usable_for(by["t6"], "peak")
+
+
 def test_family_errors_against_finest_usable_run_and_richardson():
     # peak = 5 + 0.2 h^2 at h = 1, 2, 4; the run at h = 0.5 stopped early: excluded
     rows = [row("mesh", "m4", 4.0, 8.2), row("mesh", "m2", 2.0, 5.8), row("mesh", "m1", 1.0, 5.2),
