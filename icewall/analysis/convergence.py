@@ -315,12 +315,34 @@ def plot(path: str, rows: list[dict], title: str) -> bool:
     return True
 
 
+def _stored(job: Job, say: Callable[[str], None]) -> dict:
+    """The result of `job` as its file in the output directory holds it (--tables-only)."""
+    from icewall.analysis.sweep import reuse_verdict
+    from icewall.results.reader import open_result
+
+    if not os.path.exists(job.output):
+        say(f"{job.name}: no result file: not tabled")
+        return {"status": "missing"}
+    try:
+        with open_result(job.output) as res:
+            status = res.status
+    except ResultError as exc:
+        say(f"{job.name}: unreadable result: {exc}")
+        return {"status": "failed", "reason": str(exc)}
+    why = reuse_verdict(job)[1]
+    say(f"{job.name}: tabled from its file ({why or 'this run'})")
+    return {"status": status}
+
+
 def convergence_command(deck: str, ladder: str | None = None, quick: bool = False,
                         overrides: Iterable[str] = (), outdir: str | None = None,
                         workers: int = 2, force: bool = False, make_plot: bool = True,
-                        quiet: bool = False, echo: Callable[[str], None] | None = None) -> int:
+                        quiet: bool = False, echo: Callable[[str], None] | None = None,
+                        tables_only: bool = False) -> int:
     """Body of `icewall convergence`; returns 0, or 1 when a run failed with an error (a run
-    the solver stopped, e.g. at a snap-back, is a result: tabled, not used in the errors)."""
+    the solver stopped, e.g. at a snap-back, is a result: tabled, not used in the errors).
+    `tables_only`: run nothing; table the result files in `outdir` as they are, saying which
+    were made by other code, another deck text or other overrides, and which are missing."""
     if echo is None:
         import click
 
@@ -335,6 +357,9 @@ def convergence_command(deck: str, ladder: str | None = None, quick: bool = Fals
     results: dict[str, dict] = {}
     todo = []
     for job in jobs:
+        if tables_only:
+            results[job.name] = _stored(job, say)
+            continue
         status = None if force else finished_status(job)
         if status is None:
             todo.append(job)

@@ -257,3 +257,20 @@ def test_quick_ladder_end_to_end(tmp_path, monkeypatch):
     assert text.count("skipped (completed earlier)") == 3
     assert "plot skipped: matplotlib is not installed" in text
     assert "element_size reference cf4__base" in text and "Cheapest run within" in text
+    # --tables-only: results made by other code are tabled as they are, nothing reruns,
+    # and a missing one is named
+    monkeypatch.setattr("icewall.pipeline.code_version", lambda: "other")
+    (out / "cf4__increment=2.h5").unlink()
+    stamp = (out / "cf4__base.h5").stat().st_mtime_ns
+    loud = [a for a in args if a != "-q"]
+    result = CliRunner().invoke(main, [*loud, "--tables-only", "--no-plot"])
+    assert result.exit_code == 0, result.output
+    assert (out / "cf4__base.h5").stat().st_mtime_ns == stamp
+    assert ("cf4__base: tabled from its file (the earlier result differs in code version)"
+            in result.output)
+    assert "cf4__increment=2: no result file: not tabled" in result.output
+    with open(out / "convergence_runs.csv", newline="") as f:
+        status = {(r["family"], r["value"]): r["status"] for r in csv.DictReader(f)}
+    assert status["increment", "2"] == "missing" and status["increment", "1"] == "completed"
+    both = CliRunner().invoke(main, [*args, "--tables-only", "--force"])
+    assert both.exit_code == 2 and "not both" in both.output
