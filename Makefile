@@ -5,6 +5,10 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DECK ?= decks/cf4.yaml
 
+# the converged scheme with the readings its runs in docs/solver.md use (items 18, 22)
+NEWTON := --set analysis.scheme=newton --set materials.concrete.mode_rule_band=0.1 \
+	--set materials.concrete.post_peak_strength=peak
+
 .PHONY: run test lint stability validate compare convergence convergence-newton cylinder bench schema clean
 
 $(BIN)/python:
@@ -47,9 +51,6 @@ convergence: $(VENV)/.plot  ## CF-4 and TF-1 over a discretisation ladder (long)
 	$(BIN)/icewall convergence decks/cf4.yaml -j 2 -o results/convergence/cf4
 	$(BIN)/icewall convergence decks/tf1.yaml -j 2 -o results/convergence/tf1
 
-# the converged scheme with the readings its runs in docs/solver.md use (items 18, 22)
-NEWTON := --set analysis.scheme=newton --set materials.concrete.mode_rule_band=0.1 \
-	--set materials.concrete.post_peak_strength=peak
 NEWTON_LADDER := --ladder docs/convergence/newton_ladder.yaml
 
 convergence-newton: $(VENV)/.plot  ## the Newton scheme's own error (step, tolerances) on CF-4 and TF-1 (long)
@@ -67,9 +68,7 @@ bench: $(STAMP)  ## benchmarks, outside the test suite; tables printed, CSV in b
 	$(BIN)/python benchmarks/bench_concrete.py
 	$(BIN)/python benchmarks/bench_iteration.py
 	$(BIN)/python benchmarks/bench_iteration.py --name iteration_newton --backends superlu:COLAMD \
-	    --set analysis.scheme=newton --set materials.concrete.mode_rule_band=0.1 \
-	    --set materials.concrete.post_peak_strength=peak --set 'outputs.fields=[]' \
-	    --set loads.control.target=7.5
+	    $(NEWTON) --set 'outputs.fields=[]' --set loads.control.target=7.5
 	$(BIN)/python benchmarks/bench_scaling.py --backends superlu superlu:COLAMD
 	ICEWALL_SPARSE_SOLVER=auto ICEWALL_SUPERLU_ORDERING=COLAMD $(BIN)/python \
 	    benchmarks/bench_scaling.py --backends superlu:COLAMD --csv scaling_fast.csv

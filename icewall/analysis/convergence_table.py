@@ -109,7 +109,7 @@ def family_errors(rows: list[dict]) -> dict:
     out = {}
     for family in dict.fromkeys(r["family"] for r in rows):
         members = [r for r in rows if r["family"] == family]
-        usable = {q: _finest(members, q) for q in (*SCALARS, "curve")}
+        usable = {q: _finest(members, q) for q in SCALARS}
         ref = usable["peak"][0] if usable["peak"] else None
         for row in members:
             row["reference"] = ref["run"] if ref else None

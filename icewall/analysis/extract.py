@@ -67,6 +67,14 @@ def stroke_curve(d: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return d[keep], p[keep]
 
 
+def first_fall(p: np.ndarray, softening: float = FIRST_PEAK_SOFTENING) -> int | None:
+    """Index where `p` first falls below (1 - softening) times its running maximum; None
+    where it never does."""
+    p = np.asarray(p, float)
+    fallen = np.flatnonzero(p < (1.0 - softening) * np.maximum.accumulate(p))
+    return int(fallen[0]) if fallen.size else None
+
+
 def first_maximum(p: np.ndarray, softening: float = FIRST_PEAK_SOFTENING) -> int:
     """Index of the largest load before `p` first falls below (1 - softening) times its
     running maximum (the first point at that maximum); of the largest load where it never
@@ -74,10 +82,8 @@ def first_maximum(p: np.ndarray, softening: float = FIRST_PEAK_SOFTENING) -> int
     p = np.asarray(p, float)
     if p.size == 0:
         return -1
-    running = np.maximum.accumulate(p)
-    fallen = np.flatnonzero(p < (1.0 - softening) * running)
-    end = fallen[0] if fallen.size else p.size
-    return int(np.argmax(p[:end]))
+    end = first_fall(p, softening)
+    return int(np.argmax(p[:p.size if end is None else end]))
 
 
 def stroke_mask(d: np.ndarray) -> np.ndarray:
@@ -257,7 +263,7 @@ def extract(source, *, residual_deflection: float = RESIDUAL_DEFLECTION,
         "peak_load": peak, "deflection_at_peak": d_peak, "peak_step": peak_step,
         "peaked": bool(k < d.size - 1 and p[-1] < peak),
         "first_peak_load": float(p[first]), "deflection_at_first_peak": float(d[first]),
-        "first_peak_settled": bool(np.any(p[first:] < (1 - FIRST_PEAK_SOFTENING) * p[first])),
+        "first_peak_settled": first_fall(p) is not None,
         "final_deflection": float(d[-1]), "final_load": float(p[-1]),
         "residual_load_40": res40, "residual_deflection": residual_deflection,
         "residual_plateau": plateau,
