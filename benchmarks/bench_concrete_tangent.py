@@ -73,7 +73,7 @@ def main() -> None:
           f"cracked, {committed.crushed.any(axis=1).mean():.0%} crushed; {formulation}, "
           f"{trial_stress} trial")
 
-    p = group.params
+    p = group.law.params
     rows = [("update_concrete (no moduli)", lambda: update_concrete(
         strain, committed, p, formulation, trial_stress, with_moduli=False))]
     for method in ("analytic", "differences"):

@@ -54,7 +54,6 @@ def our_iterations(mesh_path: Path, iterations: int, backends: tuple[str, ...]) 
     from icewall.model.structure import Structure
     from icewall.solve.constraints import SupportConstraints
     from icewall.solve.control import PathState, Problem, follow_path
-    from icewall.solve.nonlinear import point_flags
     from icewall.solve.settings import solver_settings
 
     with np.load(mesh_path) as z:
@@ -70,9 +69,7 @@ def our_iterations(mesh_path: Path, iterations: int, backends: tuple[str, ...]) 
     structure = Structure(kin, Assembler(kin.dofs, dofs.n_equations), groups)
     sets = peers.node_sets(nodes, length, height)
     problem = Problem(structure, SupportConstraints(dofs.n_equations, peers.fixed_dofs(sets)),
-                      peers.reference_load(len(nodes), sets), None, 2 * sets["mid"] + 1,
-                      lambda states: point_flags(groups, states),
-                      tuple(g.freezable for g in groups))
+                      peers.reference_load(len(nodes), sets), None, 2 * sets["mid"] + 1)
     initial = PathState(np.zeros(dofs.n_equations), 0.0, structure.initial_states())
     timer = PhaseTimer(sample_every=1, backends=backends, stop_after=iterations)
     tic = time.perf_counter()

@@ -26,7 +26,7 @@ from icewall.model.build import build_model
 from icewall.model.materials import build_groups
 from icewall.model.structure import Structure
 from icewall.solve.control import PathState, Problem
-from icewall.solve.nonlinear import _newton_constraints, make_constraints, point_flags
+from icewall.solve.nonlinear import _newton_constraints, make_constraints
 from icewall.solve.path import follow_path
 from icewall.solve.settings import SolverSettings, solver_settings
 
@@ -50,8 +50,7 @@ def newton_problem(deck_path: str, sets: list[str]
     constraints = make_constraints(model, structure)
     _newton_constraints(constraints)
     problem = Problem(structure, constraints, model.reference_load, model.preload,
-                      model.control_equation, lambda states: point_flags(groups, states),
-                      tuple(g.freezable for g in groups))
+                      model.control_equation)
     start = PathState(np.zeros(model.dof_map.n_equations), 0.0, structure.initial_states())
     free = np.ones(model.dof_map.n_equations, dtype=bool)
     free[constraints.fixed] = False

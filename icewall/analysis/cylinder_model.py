@@ -34,7 +34,6 @@ from icewall.model.materials import build_groups
 from icewall.model.structure import Structure
 from icewall.solve.constraints import SupportConstraints
 from icewall.solve.control import PathState, Problem, follow_path
-from icewall.solve.nonlinear import point_flags
 from icewall.solve.settings import solver_settings
 
 DIAMETER = 150.0  # mm, standard cylinder (specimens.md; the thesis gives no size)
@@ -150,8 +149,7 @@ def build_cylinder(case: CylinderCase, **analysis: Any) -> CylinderModel:
     reference[platen] = -1.0  # unit downward head force: the load factor is the force P (N)
     problem = Problem(structure, SupportConstraints(numbering.n_equations,
                                                     np.unique(np.concatenate(fixed))),
-                      reference, None, platen, lambda states: point_flags(groups, states),
-                      tuple(g.freezable for g in groups))
+                      reference, None, platen)
     return CylinderModel(case, deck, mesh, numbering, structure, problem, spacing)
 
 

@@ -34,9 +34,12 @@ location; without either the entries are None and ``source`` says why.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
+from icewall.materials.law import MaterialLaw
 from icewall.post.common import gauss_points_xy, gauss_volumes
 
 TENSION_PLATE = "bottom_plate"
@@ -112,25 +115,28 @@ class MechanismProbe:
         return out
 
 
-def _points(groups, states, shape: tuple[int, int], model: str, flag: str
+def _points(groups, states, shape: tuple[int, int], points: Callable[[MaterialLaw, Any], Any]
             ) -> np.ndarray | None:
+    """(n_el, n_qp) bool of `points(law, state)` over the groups whose law has them."""
     mask, found = np.zeros(shape, dtype=bool), False
     for group, state in zip(groups, states, strict=True):
-        if group.model == model:
-            mask[group.cells] = np.asarray(getattr(state, flag)).reshape(len(group.cells), -1)
+        chosen = points(group.law, state)
+        if chosen is not None:
+            mask[group.cells] = np.asarray(chosen).reshape(len(group.cells), -1)
             found = True
     return mask if found else None
 
 
 def crushed_points(groups, states, shape: tuple[int, int]) -> np.ndarray | None:
     """(n_el, n_qp) bool of the concrete points in compressive softening, from the material
-    groups and their states (None without a rotating-crack concrete group)."""
-    return _points(groups, states, shape, "rotating_crack", "crushed_any")
+    groups and their states (None without a law that crushes)."""
+    return _points(groups, states, shape, lambda law, state: law.crushed(state))
 
 
 def yielded_points(groups, states, shape: tuple[int, int]) -> np.ndarray | None:
-    """(n_el, n_qp) bool of the steel points that have yielded (None without von Mises steel)."""
-    return _points(groups, states, shape, "von_mises", "yielded")
+    """(n_el, n_qp) bool of the steel points that have yielded (None without a law that
+    yields)."""
+    return _points(groups, states, shape, lambda law, state: law.yielded(state))
 
 
 def thesis_plate_statement(specimen: str | None) -> bool | None:

@@ -2,7 +2,7 @@
 
 `compiled_update` is `update_concrete` (without moduli) point by point in compiled code,
 `compiled_substepped` its sub-stepped form, `compiled_floored_moduli` is
-`model.materials.floored_moduli`: the same arithmetic in the same order and NumPy's own exp and
+`concrete_law.floored_moduli`: the same arithmetic in the same order and NumPy's own exp and
 arctan2, so the same results bit for bit where NumPy's einsum and BLAS sum in the order copied
 here (x86-64; checked with AVX-512, NumPy 2.4 and its OpenBLAS), else to round-off (see
 concrete_kernels_compiled). The NumPy implementation stays the reference. Plane strain and
@@ -163,7 +163,7 @@ def compiled_substepped(strain: np.ndarray, state: ConcreteState, params: Any,
 
 def compiled_floored_moduli(state: ConcreteState, params: Any, formulation: str, floor: float,
                             coaxial: bool = False, returned_secant: bool = False) -> np.ndarray:
-    """`model.materials.floored_moduli` (n, 4, 4) for plane strain and axisymmetric."""
+    """`concrete_law.floored_moduli` (n, 4, 4) for plane strain and axisymmetric."""
     if formulation not in FORMULATIONS:
         raise ValueError(f"the compiled moduli do not cover {formulation}")
     secant = matrix_secant(state) if returned_secant else state.secant_modulus

@@ -473,7 +473,7 @@ def finish_pass(S, frozen, has_frozen, prm, W, B, decayed, O):
 @jit
 def floored_moduli_points(secant, poisson, shear, stress, strain, angle, E0, nu0, floor,
                           coaxial, phi_min):
-    """model.materials.floored_moduli (with coaxial_shear_modulus): C_g = T^T C_l T (Fig. 3.12
+    """concrete_law.floored_moduli (with coaxial_shear_modulus): C_g = T^T C_l T (Fig. 3.12
     step 8, errata 1.3) with E_i, G12 floored. The products are BLAS's chains of FMAs over
     the inner index, less the terms with a zero factor of C_l or T (signed zeros aside)."""
     n = secant.shape[0]

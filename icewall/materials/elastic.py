@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from icewall.fem.kinematics import check_formulation
+from icewall.materials.law import MaterialLaw, Update
 
 
 def elastic_moduli(E: float | np.ndarray, nu: float | np.ndarray,
@@ -50,3 +53,19 @@ def plane_stress_strain_zz(strain: np.ndarray, nu: float | np.ndarray) -> np.nda
     """Out-of-plane strain eps_zz = -nu / (1 - nu) (eps_xx + eps_yy) of plane stress, (...,)."""
     strain = np.asarray(strain, dtype=float)
     return -np.asarray(nu) / (1.0 - np.asarray(nu)) * (strain[..., 0] + strain[..., 1])
+
+
+@dataclass(frozen=True)
+class ElasticLaw(MaterialLaw):
+    """Linear elasticity with fixed moduli: no state, the moduli are the tangent."""
+
+    params: np.ndarray  # (4, 4) moduli
+
+    @property
+    def constant_moduli(self) -> np.ndarray:
+        return self.params
+
+    def update(self, strain: np.ndarray, state: None, frozen: np.ndarray | None = None,
+               returned_secant: bool = False, tangent: bool = False) -> Update:
+        moduli = np.broadcast_to(self.params, strain.shape[:-1] + (4, 4))
+        return strain @ self.params.T, moduli, state

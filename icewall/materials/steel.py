@@ -21,6 +21,7 @@ import numpy as np
 
 from icewall.fem.kinematics import check_formulation
 from icewall.materials.elastic import elastic_moduli
+from icewall.materials.law import MaterialLaw, Update
 
 YIELD_TOLERANCE = 1e-10  # relative overstress q / kappa - 1 below which a point stays elastic
 NEWTON_TOLERANCE = 1e-13  # plane stress: |consistency residual| / kappa at convergence
@@ -227,3 +228,35 @@ def _return_plane_stress(trial: np.ndarray, kappa: np.ndarray, p: SteelParameter
     d_eps_p[:, _IN_PLANE] = dg[:, None] * n  # engineering shear: 2 dg sigma_xy
     d_eps_p[:, 2] = -(d_eps_p[:, 0] + d_eps_p[:, 1])
     return stress, C, d_eps_p, 2.0 / 3.0 * dg * np.sqrt(1.5 * f2)  # (2/3) dg q
+
+
+@dataclass(frozen=True)
+class SteelLaw(MaterialLaw):
+    """Von Mises steel (`update_steel`): its moduli are its consistent tangent."""
+
+    params: SteelParameters
+
+    def initial_state(self, n: int) -> SteelState:
+        return SteelState.initial(n)
+
+    def update(self, strain: np.ndarray, state: SteelState, frozen: np.ndarray | None = None,
+               returned_secant: bool = False, tangent: bool = False) -> Update:
+        return update_steel(strain, state, self.params)
+
+    def flags(self, state: SteelState) -> np.ndarray:
+        """Yielded, (n, 1)."""
+        return np.asarray(state.yielded).reshape(-1, 1)
+
+    def counts(self, state: SteelState) -> dict[str, int]:
+        return {"yielded": int(np.count_nonzero(state.yielded))}
+
+    def elastic_strain(self, strain: np.ndarray, state: SteelState) -> np.ndarray:
+        """eps - eps_p: the strain of sigma = D (eps - eps_p)."""
+        return strain - state.plastic_strain
+
+    def state_fields(self, state: SteelState) -> dict[str, np.ndarray]:
+        return {"equivalent_plastic_strain":
+                np.asarray(state.equivalent_plastic_strain).reshape(-1, 1)}
+
+    def yielded(self, state: SteelState) -> np.ndarray:
+        return state.yielded

@@ -52,15 +52,15 @@ class Structure:
         nd = kinematics.B.shape[-1]
         self._blocks = np.zeros((self.n_elements, nd, nd))
         for group, kin in zip(groups, self._group_kinematics, strict=True):
-            if group.model == "elastic":
-                self._blocks[group.cells] = stiffness_blocks(kin, group.params.moduli)
+            if group.law.constant_moduli is not None:
+                self._blocks[group.cells] = stiffness_blocks(kin, group.law.constant_moduli)
 
     def initial_states(self) -> tuple[Any, ...]:
-        return tuple(g.initial_state for g in self.groups)
+        return tuple(g.law.initial_state(g.cells.size * self.n_gauss) for g in self.groups)
 
     @property
     def nonlinear(self) -> bool:
-        return any(g.model != "elastic" for g in self.groups)
+        return any(g.law.constant_moduli is None for g in self.groups)
 
     def evaluate(self, u: np.ndarray, states: tuple[Any, ...],
                  frozen: tuple[np.ndarray | None, ...] | None = None,
@@ -68,10 +68,10 @@ class Structure:
         """Strains, stresses, moduli and internal forces at equation vector `u`.
 
         `frozen`, per group, marks points that may only unload/reload in this pass (the
-        solver's chatter damping; used by groups whose law is freezable). `tangent`: every
-        law's moduli are its consistent tangent d sigma / d eps (concrete's rotating-crack
-        tangent instead of its iteration matrix), so `stiffness` assembles the tangent
-        stiffness d f_int / d u."""
+        solver's chatter damping; a freezable law's option, as is `returned_secant`).
+        `tangent`: every law's moduli are its consistent tangent d sigma / d eps (concrete's
+        rotating-crack tangent instead of its iteration matrix), so `stiffness` assembles the
+        tangent stiffness d f_int / d u."""
         eps = strain(self.kinematics, u)
         stress = np.empty_like(eps)
         moduli = np.empty(eps.shape + (4,))
@@ -79,13 +79,8 @@ class Structure:
         frozen = frozen or (None,) * len(self.groups)
         for group, state, mask in zip(self.groups, states, frozen, strict=True):
             n = group.cells.size * self.n_gauss
-            extra = {"frozen": mask} if group.freezable and mask is not None else {}
-            if group.freezable and returned_secant:
-                extra["returned_secant"] = True
-            if group.tangent_switch and tangent:
-                extra["tangent"] = True
-            sig, D, new = group.law(eps[group.cells].reshape(n, 4), state, group.params,
-                                    **extra)
+            sig, D, new = group.law.update(eps[group.cells].reshape(n, 4), state, mask,
+                                           returned_secant, tangent)
             stress[group.cells] = sig.reshape(-1, self.n_gauss, 4)
             moduli[group.cells] = np.broadcast_to(D, (n, 4, 4)).reshape(-1, self.n_gauss, 4, 4)
             trial.append(new)
@@ -96,8 +91,8 @@ class Structure:
     def with_tangent(self, evaluation: Evaluation) -> Evaluation:
         """`evaluation` with every law's consistent tangent as moduli: the same as
         `evaluate(..., tangent=True)` at its displacements, from the stresses, trial states
-        and committed states it holds (a law's `tangent_of`; the others' moduli already are
-        their tangents), without updating the laws again."""
+        and committed states it holds (`tangent_of` of every law with secant moduli; the
+        others' moduli already are their tangents), without updating the laws again."""
         if evaluation.tangent:
             return evaluation
         if evaluation.committed is None:
@@ -105,16 +100,11 @@ class Structure:
         moduli = evaluation.moduli.copy()
         for group, state, trial in zip(self.groups, evaluation.committed, evaluation.states,
                                        strict=True):
-            if not group.tangent_switch:
+            if not group.law.secant_moduli:
                 continue
             n, cells = group.cells.size * self.n_gauss, group.cells
-            if group.tangent_of is None:  # update again, with the tangent
-                D = group.law(evaluation.strain[cells].reshape(n, 4), state, group.params,
-                              tangent=True)[1]
-            else:
-                D = group.tangent_of(evaluation.strain[cells].reshape(n, 4),
-                                     evaluation.stress[cells].reshape(n, 4), trial, state,
-                                     group.params)
+            D = group.law.tangent_of(evaluation.strain[cells].reshape(n, 4),
+                                     evaluation.stress[cells].reshape(n, 4), trial, state)
             moduli[cells] = np.broadcast_to(D, (n, 4, 4)).reshape(-1, self.n_gauss, 4, 4)
         return replace(evaluation, moduli=moduli, tangent=True)
 
@@ -122,6 +112,6 @@ class Structure:
         """Global stiffness from the moduli of `evaluation` (secant or tangent, per law)."""
         blocks = self._blocks
         for group, kin in zip(self.groups, self._group_kinematics, strict=True):
-            if group.model != "elastic":
+            if group.law.constant_moduli is None:
                 blocks[group.cells] = stiffness_blocks(kin, evaluation.moduli[group.cells])
         return self.assembler.matrix(blocks)

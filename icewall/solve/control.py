@@ -87,8 +87,12 @@ class Problem:
     reference_load: np.ndarray  # R*, unit jack load on every patch (n_eq,)
     preload: np.ndarray | None  # in-plane load vector (n_eq,), held during control
     control_equation: int  # deflection = -u[control_equation]
-    point_flags: Any  # callable(states) -> per group (n, k) crack/crush/yield flags or None
-    freezable: tuple[bool, ...] = ()  # per group: may its points be frozen (chatter damping)
+
+    def point_flags(self, states) -> tuple[np.ndarray | None, ...]:
+        """Per group, the (n, k) flags of each point whose switching within an increment
+        counts as chatter (the law's `flags`: crack, crush, yield), or None."""
+        return tuple(group.law.flags(state)
+                     for group, state in zip(self.structure.groups, states, strict=True))
 
 
 def _norm(x: np.ndarray) -> float:
@@ -111,7 +115,7 @@ def _chatter(problem: Problem, settings: SolverSettings, states, flags_before, c
         total += int(np.count_nonzero(changed))
         changes[k] += changed
         mask = changes[k] >= settings.max_flag_changes
-        freezable = problem.freezable[k] if k < len(problem.freezable) else False
+        freezable = problem.structure.groups[k].law.freezable
         frozen.append(mask if freezable and mask.any() else None)
         any_frozen |= frozen[-1] is not None
     forensics["gauss_flag_changes"].append(total)

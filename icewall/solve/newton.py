@@ -148,7 +148,7 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         new_flags = problem.point_flags(trial.evaluation.states)
         forensics["gauss_flag_changes"].append(_count_changes(flags, new_flags))
         if log.isEnabledFor(logging.DEBUG) and forensics["gauss_flag_changes"][-1]:
-            log.debug("  flag changes per column of each group (solve.nonlinear.point_flags): "
+            log.debug("  flag changes per column of each group (the laws' flags): "
                       "%s", _changes_per_column(flags, new_flags))
         flags = new_flags
         # the gap forces after the pair states were updated

@@ -12,7 +12,6 @@ from typing import Any
 import numpy as np
 
 from icewall.errors import ResultError
-from icewall.materials.orthotropic import local_normal_components
 from icewall.model.build import Model
 from icewall.model.materials import MaterialGroup, build_groups
 from icewall.model.structure import Evaluation, Structure
@@ -52,52 +51,22 @@ class StepReport:
         return state_fields(self.structure, self.increment.evaluation.states)
 
 
-def point_flags(groups: tuple[MaterialGroup, ...], states) -> tuple[np.ndarray | None, ...]:
-    """Per group, the flags of each point whose switching within an increment the solver
-    counts as chatter, (n, k): concrete: cracked, crushed, and loading on a descending branch
-    (per direction: the loading/unloading decision beyond the peak, the classic limit cycle
-    of a secant iteration on softening), and which labelling of the principal axes it took;
-    steel: yielded."""
-    flags = []
-    for group, state in zip(groups, states, strict=True):
-        if group.model == "rotating_crack":
-            magnitude = np.abs(state.equivalent_uniaxial_strain)
-            softening = ((magnitude >= state.max_equivalent_uniaxial_strain)
-                         & (magnitude > np.abs(state.uniaxial_peak_strain)))
-            # which labelling of the principal axes the point took: the one nearest the
-            # committed axes swaps where the axes rotate by 45 degrees
-            local_strain = local_normal_components(state.strain, state.angle, 1.0)
-            major_on_1 = (local_strain[:, 0] >= local_strain[:, 1])[:, None]
-            flags.append(np.concatenate([state.cracked, state.crushed, softening, major_on_1],
-                                        axis=1))
-        elif group.model == "von_mises":
-            flags.append(np.asarray(state.yielded).reshape(-1, 1))
-        else:
-            flags.append(None)
-    return tuple(flags)
-
-
 def state_counts(groups: tuple[MaterialGroup, ...], states) -> dict[str, int]:
-    """Points cracked in plane / out of plane, crushed (softening), yielded."""
+    """Points in each named condition of every law (cracked, crushed, yielded)."""
     counts = {}
     for group, state in zip(groups, states, strict=True):
-        if group.model == "rotating_crack":
-            counts["cracked_in_plane"] = int(np.count_nonzero(state.cracked_in_plane))
-            counts["cracked_out_of_plane"] = int(np.count_nonzero(state.cracked_out_of_plane))
-            counts["crushed"] = int(np.count_nonzero(state.crushed_any))
-        elif group.model == "von_mises":
-            counts["yielded"] = int(np.count_nonzero(state.yielded))
+        counts.update(group.law.counts(state))
     return counts
 
 
 def _elastic_energy(structure: Structure, ev: Evaluation) -> dict[str, float]:
+    """Per group, 1/2 sigma : eps_e of the law's elastic strain (for steel eps - eps_p)."""
     dV = structure.kinematics.dV
     energy = {}
     for group, state in zip(structure.groups, ev.states, strict=True):
         cells = group.cells
         eps = ev.strain[cells]
-        if group.model == "von_mises":  # 1/2 sigma : (eps - eps_p)
-            eps = eps - state.plastic_strain.reshape(eps.shape)
+        eps = group.law.elastic_strain(eps.reshape(-1, 4), state).reshape(eps.shape)
         energy[group.name] = secant_elastic_energy(ev.stress[cells], eps, dV[cells])
     return energy
 
@@ -125,8 +94,7 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
     if settings.scheme == "newton":
         _newton_constraints(constraints)
     problem = Problem(structure, constraints, model.reference_load, model.preload,
-                      model.control_equation, lambda states: point_flags(groups, states),
-                      tuple(g.freezable for g in groups))
+                      model.control_equation)
     energy = EnergyAccount()
     if resume is None:
         start = PathState(np.zeros(model.dof_map.n_equations), 0.0, structure.initial_states())
@@ -251,20 +219,13 @@ def _same_shape(value: np.ndarray, like, name: str) -> np.ndarray:
 
 
 def state_fields(structure: Structure, states) -> dict[str, np.ndarray]:
-    """Material-state Gauss fields over all elements (zero outside the owning group):
-    concrete_flags (cracked 1-3, crushed 1-3; int8), orthotropy_angle (rad),
+    """Material-state Gauss fields of every law over all elements (zero outside the owning
+    group): concrete_flags (cracked 1-3, crushed 1-3; int8), orthotropy_angle (rad),
     equivalent_plastic_strain (steel)."""
     n_el, nq = structure.n_elements, structure.n_gauss
     fields: dict[str, np.ndarray] = {}
     for group, state in zip(structure.groups, states, strict=True):
-        shape = (group.cells.size, nq)
-        if group.model == "rotating_crack":
-            flags = fields.setdefault("concrete_flags", np.zeros((n_el, nq, 6), np.int8))
-            flags[group.cells] = np.concatenate([state.cracked, state.crushed],
-                                                axis=1).reshape(shape + (6,))
-            angle = fields.setdefault("orthotropy_angle", np.zeros((n_el, nq, 1)))
-            angle[group.cells] = state.angle.reshape(shape + (1,))
-        elif group.model == "von_mises":
-            peeq = fields.setdefault("equivalent_plastic_strain", np.zeros((n_el, nq, 1)))
-            peeq[group.cells] = np.asarray(state.equivalent_plastic_strain).reshape(shape + (1,))
+        for name, value in group.law.state_fields(state).items():
+            field = fields.setdefault(name, np.zeros((n_el, nq) + value.shape[1:], value.dtype))
+            field[group.cells] = value.reshape((group.cells.size, nq) + value.shape[1:])
     return fields

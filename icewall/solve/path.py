@@ -87,9 +87,10 @@ class _Path:
 
     def snap_back_control(self, fraction: float):
         """The control through a snap-back: the opening of the concrete points at or near
-        cracking (`opening_control`); without concrete (a law of another kind, e.g. the
-        test bars), the energy released, as `fraction` of the external work so far."""
-        if any(g.model == "rotating_crack" for g in self.problem.structure.groups):
+        cracking (`opening_control`); without a law that cracks (e.g. the test bars),
+        the energy released, as `fraction` of the external work so far."""
+        if any(g.law.cracking(s) is not None
+               for g, s in zip(self.problem.structure.groups, self.state.states, strict=True)):
             return self.opening_control(fraction)
         return DissipationControl(self.state.u, self.state.load_factor, self.R, self.F_pre,
                                   fraction * self.work())
@@ -101,12 +102,12 @@ class _Path:
         kin, nq = s.kinematics, s.n_gauss
         elements, points, scales = [], [], []
         for group, state in zip(s.groups, self.state.states, strict=True):
-            if group.model != "rotating_crack":
+            cracking = group.law.cracking(state)
+            if cracking is None:
                 continue
-            eps_t = np.broadcast_to(np.asarray(group.params.eps_t, float), (state.strain.shape[0],))
+            eps_t, cracked = cracking
             largest = largest_principal(state.strain)[0]
-            chosen = np.flatnonzero((largest >= NEAR_CRACKING * eps_t)
-                                    | state.cracked.any(axis=1))
+            chosen = np.flatnonzero((largest >= NEAR_CRACKING * eps_t) | cracked)
             if chosen.size == 0:  # none near cracking: the ten nearest
                 chosen = np.argsort(largest / eps_t)[-10:]
             elements.append(group.cells[chosen // nq])

@@ -22,6 +22,7 @@ pytest.importorskip("numba")
 import icewall.materials.concrete_compiled as compiled  # noqa: E402
 from icewall.deck.load import load_deck  # noqa: E402
 from icewall.materials.concrete import update_concrete  # noqa: E402
+from icewall.materials.concrete_law import ConcreteLaw, floored_moduli  # noqa: E402
 from icewall.materials.concrete_state import ConcreteState  # noqa: E402
 from icewall.materials.mode_rules import equivalent_uniaxial_strengths  # noqa: E402
 from icewall.materials.parameters import derive_concrete_parameters  # noqa: E402
@@ -29,11 +30,7 @@ from icewall.materials.substep import update_concrete_substepped  # noqa: E402
 from icewall.materials.ultimate_surface import strength_scale  # noqa: E402
 from icewall.mesh.build import build_mesh, region_materials  # noqa: E402
 from icewall.model.build import build_model  # noqa: E402
-from icewall.model.materials import (  # noqa: E402
-    build_groups,
-    concrete_point_parameters,
-    floored_moduli,
-)
+from icewall.model.materials import build_groups, concrete_point_parameters  # noqa: E402
 from icewall.pipeline import run_deck  # noqa: E402
 
 DECKS = Path(__file__).resolve().parents[2] / "decks"
@@ -317,7 +314,7 @@ def _concrete_kernel(monkeypatch, kernel: str | None, *overrides: str) -> str:
     model = build_model(deck, build_mesh(deck), region_materials(deck))
     groups = build_groups(deck, model.cell_material, model.gauss_spacing,
                           model.kinematics.dV.shape[1])
-    return next(g for g in groups if g.model == "rotating_crack").kernel
+    return next(g for g in groups if isinstance(g.law, ConcreteLaw)).law.kernel
 
 
 def test_kernel_selection(monkeypatch):

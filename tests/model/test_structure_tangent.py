@@ -79,7 +79,7 @@ def test_compiled_and_numpy_kernels_give_the_same_tangent(monkeypatch):
     for kernel in ("numpy", "numba"):
         monkeypatch.setenv(concrete_compiled.KERNEL_VARIABLE, kernel)
         structure, dofs, points = _block("plane_strain")
-        assert structure.groups[0].kernel == kernel
+        assert structure.groups[0].law.kernel == kernel
         committed = structure.evaluate(_field(dofs, points, 1.2e-4, 0.0, 2e-4, 1),
                                        structure.initial_states()).states
         u = _field(dofs, points, 1.3e-4, 3e-4, 2e-4, 2)

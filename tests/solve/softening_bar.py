@@ -10,6 +10,7 @@ from icewall.fem.assembly import Assembler
 from icewall.fem.dofs import DofMap
 from icewall.fem.kinematics import element_kinematics
 from icewall.fem.quadrature import gauss_rule
+from icewall.materials.law import MaterialLaw
 from icewall.mesh.structured import rectangle_mesh
 from icewall.model.materials import MaterialGroup
 from icewall.model.structure import Structure
@@ -44,6 +45,23 @@ def softening_law(strain, kappa, p: SofteningParams):
     return stress, D, k
 
 
+@dataclass(frozen=True)
+class SofteningLaw(MaterialLaw):
+    """`softening_law`; the state is the largest strain so far, a point past its peak strain
+    is flagged."""
+
+    params: SofteningParams
+
+    def initial_state(self, n: int) -> np.ndarray:
+        return np.zeros(n)
+
+    def update(self, strain, state, frozen=None, returned_secant=False, tangent=False):
+        return softening_law(strain, state, self.params)
+
+    def flags(self, state: np.ndarray) -> np.ndarray:
+        return (state > self.params.strength / self.params.E)[:, None]
+
+
 def bar_problem(length: float, n_el: int, E=30000.0, strength=3.0, weak=0.9,
                 failure_strain=0.002):
     """Bar [0, L] x [0, 10], 1 mm thick, fixed at x = L, pulled at x = 0 in -x."""
@@ -51,11 +69,10 @@ def bar_problem(length: float, n_el: int, E=30000.0, strength=3.0, weak=0.9,
     dofs = DofMap(mesh.n_nodes)
     kin = element_kinematics(mesh.points, mesh.cells, "quad4", gauss_rule(2), "plane_stress",
                              1.0, dofs)
-    n_points = n_el * 4
-    strengths = np.full(n_points, strength)
+    strengths = np.full(n_el * 4, strength)
     strengths[:4] = weak * strength  # the element at the loaded end is the weak one
-    group = MaterialGroup("bar", "softening", np.arange(n_el), softening_law,
-                          SofteningParams(E, strengths, failure_strain), np.zeros(n_points))
+    group = MaterialGroup("bar", np.arange(n_el),
+                          SofteningLaw(SofteningParams(E, strengths, failure_strain)))
     structure = Structure(kin, Assembler(kin.dofs, dofs.n_equations), (group,))
     right = mesh.node_sets["right"]
     fixed = np.concatenate([dofs.equations(right, 0), dofs.equations(np.arange(mesh.n_nodes),
@@ -64,8 +81,7 @@ def bar_problem(length: float, n_el: int, E=30000.0, strength=3.0, weak=0.9,
     R = np.zeros(dofs.n_equations)
     R[dofs.equations(left, 0)] = -0.5  # total 1 N pulling in -x
     control = int(dofs.equations(left[:1], 0)[0])
-    problem = Problem(structure, SupportConstraints(dofs.n_equations, fixed), R, None, control,
-                      lambda states: tuple((s > strengths / E)[:, None] for s in states))
+    problem = Problem(structure, SupportConstraints(dofs.n_equations, fixed), R, None, control)
     initial = PathState(np.zeros(dofs.n_equations), 0.0, structure.initial_states())
     return problem, initial
 

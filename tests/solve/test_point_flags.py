@@ -2,22 +2,20 @@
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
 from icewall.materials.concrete import update_concrete
+from icewall.materials.concrete_law import ConcreteLaw
 from icewall.materials.concrete_state import ConcreteState
 from icewall.materials.orthotropic import global_strain
 from icewall.materials.parameters import derive_concrete_parameters
-from icewall.solve.nonlinear import point_flags
 
 PARAMS = derive_concrete_parameters(53.5, 100.0)
-GROUP = (SimpleNamespace(model="rotating_crack"),)
+LAW = ConcreteLaw(PARAMS, "plane_stress", 0.5 * PARAMS.eps_t, "corotational", 0.0, False, False)
 
 
 def _softening_flag(state: ConcreteState) -> np.ndarray:
-    (flags,) = point_flags(GROUP, (state,))
+    flags = LAW.flags(state)
     # cracked (3), crushed (3), loading past the peak (3), labelling of the principal axes
     assert flags.shape == (1, 10)
     return flags[0, 6:9]
@@ -53,8 +51,8 @@ def test_the_labelling_of_the_principal_axes_is_a_flag():
         # the compressive principal strain along the angle
         strain = global_strain(np.array([[-1e-3, 2e-4, 0.0]]), np.radians([degrees]))
         _, _, trial = update_concrete(strain, state, PARAMS, "plane_strain", "corotational")
-        (flags,) = point_flags(GROUP, (trial,))
+        flags = LAW.flags(trial)
         labels.append(bool(flags[0, 9]))
-    (committed,) = point_flags(GROUP, (state,))
+    committed = LAW.flags(state)
     assert labels[0] == labels[1] == bool(committed[0, 9])
     assert labels[2] == labels[3] != labels[1]
