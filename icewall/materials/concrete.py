@@ -36,13 +36,21 @@ from typing import Any
 import numpy as np
 
 from icewall.fem.kinematics import check_formulation
+from icewall.materials.concrete_formulas import (
+    changes_sign,
+    direction_state,
+    envelope_stress,
+    keeps_peak,
+    loads,
+    loads_across_zero,
+    shear_modulus,
+)
 from icewall.materials.concrete_state import ConcreteState
 from icewall.materials.mode_rules import (
     equivalent_uniaxial_peak_strains,
     equivalent_uniaxial_strengths,
 )
 from icewall.materials.orthotropic import (
-    compression_poisson_ratio,
     condense_plane_stress,
     global_moduli,
     global_stress,
@@ -50,7 +58,6 @@ from icewall.materials.orthotropic import (
     local_shear_strain,
     orthotropic_normal_stiffness,
     principal_strain_angle,
-    tension_poisson_ratio,
 )
 from icewall.materials.uniaxial import compression_envelope, tension_envelope
 
@@ -90,29 +97,28 @@ def loading_directions(trial: np.ndarray, eps_u: np.ndarray, state: ConcreteStat
     """(loading, sign_change) (n, 3) bool of Fig. 3.12 step 6 for the trial stress and its
     eps_iu: loading where |eps_iu| passes its maximum (Fig. 3.13); sign_change where eps_iu
     has left the sign of the committed uniaxial strength."""
-    magnitude = np.abs(eps_u)
-    secant_line = state.secant_modulus * magnitude
     # a direction that changes sign never unloads along a secant above its new envelope
     # (checked against the uniaxial envelope, so that a zero increment stays an unloading)
-    sign_change = (eps_u > 0.0) != (state.uniaxial_strength > 0.0)
+    sign_change = changes_sign(eps_u, state.uniaxial_strength)
     # round-off of the rotation is relative to the point's largest stress, not to sigma_i
-    slack = LOADING_TOLERANCE * (state.max_equivalent_uniaxial_strain + np.abs(
-        trial).max(axis=1, keepdims=True) / state.secant_modulus)
-    loading = magnitude > state.max_equivalent_uniaxial_strain + slack
+    loading = loads(eps_u, state.max_equivalent_uniaxial_strain,
+                    np.abs(trial).max(axis=1, keepdims=True), state.secant_modulus,
+                    LOADING_TOLERANCE)
     rows = np.nonzero(sign_change.any(axis=1))[0]
     if rows.size:
-        uniaxial_strength = np.where(eps_u[rows] > 0.0, params.ft, -params.fc)
-        uniaxial_stress, _ = _envelope(eps_u[rows], uniaxial_strength, np.where(
-            eps_u[rows] > 0.0, params.eps_t, -params.eps_c), params, rows)
-        crossing = secant_line[rows] > uniaxial_stress * (1 + 1e-9)
+        tensile = eps_u[rows] > 0.0
+        uniaxial_stress, _ = _envelope(eps_u[rows], np.where(tensile, params.ft, -params.fc),
+                                       np.where(tensile, params.eps_t, -params.eps_c), params,
+                                       rows)
         # a direction past its peak on the other sign's branch (cracked, now closing in
         # compression, or crushed, now in tension) loads only where its secant line meets the
         # new envelope: its max |eps_iu| belongs to the other branch, and loading onto this
         # branch at that magnitude makes the stress jump (a closing crack leapt from its crack
         # secant to the compression envelope: VTT1 cycled between the two at 38.6 mm)
-        damaged = state.cracked[rows] | state.crushed[rows]
-        loading[rows] = (loading[rows] & ~(damaged & sign_change[rows])
-                         | sign_change[rows] & crossing)
+        loading[rows] = loads_across_zero(loading[rows], sign_change[rows],
+                                          state.cracked[rows] | state.crushed[rows],
+                                          state.secant_modulus[rows], eps_u[rows],
+                                          uniaxial_stress)
     return loading, sign_change
 
 
@@ -123,37 +129,32 @@ def past_peak(eps_u: np.ndarray, cracked: np.ndarray, crushed: np.ndarray,
     tension, crushed in compression) without a change of sign. All False under "ray"."""
     if getattr(params, "post_peak_strength", "ray") != "peak":
         return np.zeros(eps_u.shape, dtype=bool)
-    return ~sign_change & np.where(eps_u > 0.0, cracked, crushed)
+    return keeps_peak(eps_u, sign_change, cracked, crushed)
 
 
-def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
-                    trial_stress: str = "incremental", frozen: np.ndarray | None = None,
-                    with_moduli: bool = True
-                    ) -> tuple[np.ndarray, np.ndarray | None, ConcreteState]:
-    """Stress (n, 4), secant moduli (n, 4, 4; None unless `with_moduli`) and trial state at
-    total strain (n, 4).
-
-    plane_strain: eps_zz = 0 is imposed and sigma_zz tracked. plane_stress: sigma_zz = 0 is
-    condensed, the input eps_zz is ignored and the solved one stored in the trial state (moduli
-    have zero zz row/column). axisymmetric: zz is the hoop direction, taken from the input.
-    """
-    check_formulation(formulation)
+def _strain_and_axes(strain: np.ndarray, state: ConcreteState, formulation: str,
+                     frozen_column: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """Steps 1-2: the total strain (n, 4) (zz imposed or, in plane stress, the committed one
+    until step 3 solves it) and the angle beta (n,) of its principal axes."""
     strain = np.array(strain, dtype=float, copy=True).reshape(-1, 4)
-    nu0 = float(params.nu0)
-    plane_stress = formulation == "plane_stress"
     if formulation == "plane_strain":
         strain[:, 2] = 0.0
-    elif plane_stress:
+    elif formulation == "plane_stress":
         strain[:, 2] = state.strain[:, 2]
-
-    # Steps 1-2: new axes; committed stress and strain increment referred to them (errata 1.3).
     angle = principal_strain_angle(strain, state.angle)
-    frozen_column = None if frozen is None else np.asarray(frozen, dtype=bool)[:, None]
     if frozen_column is not None:
         # a frozen point keeps its axes for the rest of the increment (a fixed crack with shear
         # retention, below): near a 45-degree rotation the nearest labelling of the principal
         # axes swaps between iterates and, with it, the committed stresses and damage
         angle = np.where(frozen_column[:, 0], state.angle, angle)
+    return strain, angle
+
+
+def _trial_stress(strain: np.ndarray, angle: np.ndarray, state: ConcreteState,
+                  plane_stress: bool, trial_stress: str) -> np.ndarray:
+    """Steps 2-3: committed stress and strain increment in the new axes (errata 1.3), trial
+    stress sigma_lt (n, 3) with C_l of the committed E, nu. Plane stress: sigma_3t = 0 fixes
+    the out-of-plane strain (errata §3), solved into strain[:, 2]."""
     if trial_stress == "corotational":  # committed principal values carried with the axes
         strain_increment = (local_normal_components(strain, angle, 1.0)
                             - local_normal_components(state.strain, state.angle, 1.0))
@@ -162,14 +163,12 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         strain_increment = local_normal_components(strain - state.strain, angle, 1.0)
         committed_stress = local_normal_components(state.stress, angle, 2.0)
     stiffness = orthotropic_normal_stiffness(state.secant_modulus, state.poisson_ratio)
-    if plane_stress:  # sigma_3t = 0 fixes the out-of-plane strain increment (errata §3)
+    if plane_stress:
         strain_increment[:, 2] = -(committed_stress[:, 2]
                                    + stiffness[:, 2, 0] * strain_increment[:, 0]
                                    + stiffness[:, 2, 1] * strain_increment[:, 1]
                                    ) / stiffness[:, 2, 2]
         strain[:, 2] += strain_increment[:, 2]
-
-    # Step 3: trial stress; step 4: eps_iu = sigma_lt / E_i (secant; errata 1.1 on eq. 3.8).
     if trial_stress == "total":  # C_l(E^i) eps_l: the secant relation of the committed moduli
         local_strain = local_normal_components(strain, angle, 1.0)
         if plane_stress:
@@ -181,16 +180,16 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         trial = committed_stress + np.einsum("nij,nj->ni", stiffness, strain_increment)
     if plane_stress:
         trial[:, 2] = 0.0
-    eps_u = trial / state.secant_modulus
+    return trial
 
-    # Step 6 (first): loading vs unloading by max |eps_iu| per direction (errata §3,
-    # Fig. 3.13); it does not depend on the strength surface.
-    magnitude = np.abs(eps_u)
-    loading, sign_change = loading_directions(trial, eps_u, state, params)
 
-    # Step 5: uniaxial parameters on the ray of the trial stress (errata 1.3, step 5), and the
-    # envelope at eps_iu. Only a loading direction reads them: the points with none keep their
-    # committed values (every use below is masked by `loading`), and skip the surface.
+def _curve_parameters(trial: np.ndarray, eps_u: np.ndarray, loading: np.ndarray,
+                      sign_change: np.ndarray, state: ConcreteState, params: Any
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Step 5: sigma_ic, eps_ic on the ray of the trial stress (errata 1.3), and the envelope
+    (stress, secant) at eps_iu, each (n, 3). Only a loading direction reads them: the points
+    with none keep their committed values (every use is masked by `loading`), and skip the
+    surface."""
     strength = state.uniaxial_strength.copy()
     peak_strain = state.uniaxial_peak_strain.copy()
     envelope_stress, envelope_secant = np.abs(trial), state.secant_modulus.copy()
@@ -206,62 +205,70 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
                                       peak_strain[loads])
         envelope_stress[loads], envelope_secant[loads] = _envelope(
             eps_u[loads], strength[loads], peak_strain[loads], params, loads)
-    # on the same branch the secant never grows (damage is irreversible; the thesis is silent):
-    # where the surface now gives a larger sigma_ic, load along the current secant instead
-    heal = ~sign_change & (envelope_secant > state.secant_modulus)
-    if frozen_column is not None:  # the solver's chatter damping: no damage grows here
-        held = loading & ~heal & frozen_column
-        loading &= ~held
-    secant_modulus = np.where(loading & ~heal, envelope_secant, state.secant_modulus)
-    # on the envelope sigma_i = sign(eps_iu) sigma_env = E_i eps_iu, except where the secant is
-    # floored far down a softening branch (uniaxial.SECANT_FLOOR): there the stress -> 0
-    local_stress = np.where(loading & ~heal, np.copysign(envelope_stress, eps_u), trial)
-    if frozen_column is not None:
-        # a held direction keeps its secant but never rises above its envelope (it would
-        # reload along the secant past the peak, e.g. to twice f'c in uniaxial compression)
-        local_stress = np.where(held, np.copysign(np.minimum(np.abs(trial), envelope_stress),
-                                                  eps_u), local_stress)
+    return strength, peak_strain, envelope_stress, envelope_secant
 
-    strain_ratio = magnitude / np.abs(np.where(loading, peak_strain, state.uniaxial_peak_strain))
-    nu_new = np.where(eps_u > 0.0, tension_poisson_ratio(strain_ratio, nu0),
-                      compression_poisson_ratio(strain_ratio, nu0))
-    poisson_ratio = np.where(loading, np.minimum(nu_new, params.nu_max), state.poisson_ratio)
+
+def _update_directions(trial: np.ndarray, eps_u: np.ndarray, loading: np.ndarray,
+                       sign_change: np.ndarray, frozen_column: np.ndarray | None,
+                       curve: tuple[np.ndarray, ...], state: ConcreteState, params: Any
+                       ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Step 6: per direction the stress on the envelope (eqs. 3.9-3.11) where loading, along
+    the secant where unloading (Fig. 3.13), the secant E_i, nu_i (eqs. 3.19-3.20), G12 (eq.
+    3.21). Returns the local stresses (n, 3) and the trial state's fields of the directions.
+    A frozen point (the solver's chatter damping) grows no damage."""
+    strength, peak_strain, envelope_stress_, envelope_secant = curve
+    frozen = False if frozen_column is None else frozen_column
+    loading, local_stress, secant = envelope_stress(
+        trial, eps_u, state.secant_modulus, loading, sign_change, frozen, envelope_stress_,
+        envelope_secant)
+    max_eps_u, poisson, strength, peak_strain, cracked, crushed = direction_state(
+        eps_u, loading, frozen, state.max_equivalent_uniaxial_strain, state.poisson_ratio,
+        state.uniaxial_strength, state.uniaxial_peak_strain, state.cracked, state.crushed,
+        strength, peak_strain, float(params.nu0), params.nu_max)
+    return local_stress, {
+        "equivalent_uniaxial_strain": eps_u, "max_equivalent_uniaxial_strain": max_eps_u,
+        "secant_modulus": secant, "poisson_ratio": poisson,
+        "shear_modulus": shear_modulus(secant[:, 0], secant[:, 1], float(params.nu0)),
+        "uniaxial_strength": strength, "uniaxial_peak_strain": peak_strain,
+        "cracked": cracked, "crushed": crushed}
+
+
+def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,
+                    trial_stress: str = "incremental", frozen: np.ndarray | None = None,
+                    with_moduli: bool = True
+                    ) -> tuple[np.ndarray, np.ndarray | None, ConcreteState]:
+    """Stress (n, 4), secant moduli (n, 4, 4; None unless `with_moduli`) and trial state at
+    total strain (n, 4).
+
+    plane_strain: eps_zz = 0 is imposed and sigma_zz tracked. plane_stress: sigma_zz = 0 is
+    condensed, the input eps_zz is ignored and the solved one stored in the trial state (moduli
+    have zero zz row/column). axisymmetric: zz is the hoop direction, taken from the input.
+    """
+    check_formulation(formulation)
+    plane_stress = formulation == "plane_stress"
+    frozen_column = None if frozen is None else np.asarray(frozen, dtype=bool)[:, None]
+    strain, angle = _strain_and_axes(strain, state, formulation, frozen_column)
+    trial = _trial_stress(strain, angle, state, plane_stress, trial_stress)
+    eps_u = trial / state.secant_modulus  # step 4: secant (errata 1.1 on eq. 3.8)
+    # step 6 first: loading vs unloading, which does not depend on the strength surface
+    loading, sign_change = loading_directions(trial, eps_u, state, params)
+    curve = _curve_parameters(trial, eps_u, loading, sign_change, state, params)  # step 5
+    local_stress, directions = _update_directions(trial, eps_u, loading, sign_change,
+                                                  frozen_column, curve, state, params)
     if plane_stress:  # direction 3 carries no stress: it keeps its virgin properties
         local_stress[:, 2] = 0.0
-    # Eq. 3.21: G12 = G120 * min(E_1/E_10, E_2/E_20) over the in-plane directions.
-    shear_modulus = secant_modulus[:, :2].min(axis=1) / (2.0 * (1.0 + nu0))
-
-    beyond_peak = loading & (magnitude > np.abs(peak_strain))
-    # held axes (frozen points): the shear strain in them meets G12 (eq. 3.21)
+    # step 8: the held axes of a frozen point keep a shear stress, G12 times their shear strain
     stress = global_stress(local_stress, angle, None if frozen_column is None else np.where(
-        frozen_column[:, 0], shear_modulus * local_shear_strain(strain, angle), 0.0))
-
-    # Steps 7-8: secant moduli in global axes (skipped where the caller builds its own).
-    moduli = None
+        frozen_column[:, 0], directions["shear_modulus"] * local_shear_strain(strain, angle),
+        0.0))
+    moduli = None  # steps 7-8 (skipped where the caller builds its own)
     if with_moduli:
-        new_stiffness = orthotropic_normal_stiffness(secant_modulus, poisson_ratio)
+        new_stiffness = orthotropic_normal_stiffness(directions["secant_modulus"],
+                                                     directions["poisson_ratio"])
         if plane_stress:
             new_stiffness = condense_plane_stress(new_stiffness)
-        moduli = global_moduli(new_stiffness, shear_modulus, angle)
-
-    trial_state = ConcreteState(
-        strain=strain,
-        stress=stress,
-        angle=angle,
-        equivalent_uniaxial_strain=eps_u,
-        # a frozen point's history does not grow: it loads on from there in the next step
-        max_equivalent_uniaxial_strain=np.maximum(state.max_equivalent_uniaxial_strain,
-                                                  magnitude if frozen_column is None
-                                                  else np.where(frozen_column, 0.0, magnitude)),
-        secant_modulus=secant_modulus,
-        poisson_ratio=poisson_ratio,
-        shear_modulus=shear_modulus,
-        uniaxial_strength=np.where(loading, strength, state.uniaxial_strength),
-        uniaxial_peak_strain=np.where(loading, peak_strain, state.uniaxial_peak_strain),
-        cracked=state.cracked | (beyond_peak & (eps_u > 0.0)),
-        crushed=state.crushed | (beyond_peak & (eps_u < 0.0)),
-    )
-    return stress, moduli, trial_state
+        moduli = global_moduli(new_stiffness, directions["shear_modulus"], angle)
+    return stress, moduli, ConcreteState(strain=strain, stress=stress, angle=angle, **directions)
 
 
 def matrix_secant(state: ConcreteState) -> np.ndarray:

@@ -131,8 +131,7 @@ def compiled_update(strain: np.ndarray, state: ConcreteState, params: Any, formu
     lode_x, lode_y = np.empty(n), np.empty(n)
     # NumPy's arctan2 and exp between the passes, as principal_strain_angle, lode_angle and
     # softening_stress call them (SIMD code where NumPy has it: no libm call matches it)
-    major = 0.5 * np.arctan2(0.5 * strain[:, 3], 0.5 * (strain[:, 0] - strain[:, 1]))
-    kernels.trial_pass(strain, major, S, mask, frozen is not None,
+    kernels.trial_pass(strain, orthotropic.major_strain_angle(strain), S, mask, frozen is not None,
                        trial_stress == "corotational", formulation == "plane_strain", prm, k_t,
                        k_c, out, work, flags, exponent)
     kernels.ray_pass(S, prm, work, flags, np.exp(-exponent), lode_x, lode_y)

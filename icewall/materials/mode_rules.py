@@ -11,6 +11,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from icewall.materials.concrete_formulas import (
+    MAX_SCALE,
+    ZERO_TOLERANCE,
+    mode_rule_strength,
+    mode_rule_weight,
+    peak_strain,
+    zero_component,
+)
 from icewall.materials.ultimate_surface import strength_scale
 
 if TYPE_CHECKING:
@@ -18,8 +26,9 @@ if TYPE_CHECKING:
 
 
 def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParameters, *,
-                                  strain_sign: ArrayLike | None = None, zero_tol: float = 1e-6,
-                                  max_scale: float = 100.0) -> np.ndarray:
+                                  strain_sign: ArrayLike | None = None,
+                                  zero_tol: float = ZERO_TOLERANCE,
+                                  max_scale: float = MAX_SCALE) -> np.ndarray:
     """Signed sigma_ic (n,3) (negative = compression), in the columns' own order.
 
     sigma_ic = s sigma_i on the proportional ray (§3.2.4), then the §3.2.5 mode rules read
@@ -37,29 +46,18 @@ def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParamete
     p = np.atleast_2d(np.asarray(principal, dtype=float))
     fc, ft = params.fc, params.ft
     s = np.asarray(strength_scale(p, fc, params.surface, max_scale=max_scale))
-    sic = s[:, None] * p
-    mag = np.max(np.abs(p), axis=1, keepdims=True)
-    zero = (np.abs(p) <= zero_tol * mag) | (mag <= 1e-12 * fc)
+    zero = zero_component(p, np.max(np.abs(p), axis=1, keepdims=True), fc, zero_tol)
     hint = p if strain_sign is None else np.broadcast_to(np.asarray(strain_sign, float), p.shape)
-    fallback = np.where(hint < 0.0, -fc, ft)
-    tens, comp = (p > 0.0) & ~zero, (p < 0.0) & ~zero
-    any_t = tens.any(axis=1, keepdims=True)
-    any_c = comp.any(axis=1, keepdims=True)
-    out = sic.copy()
+    any_tension = ((p > 0.0) & ~zero).any(axis=1, keepdims=True)
+    any_compression = ((p < 0.0) & ~zero).any(axis=1, keepdims=True)
+    banded = params.mode_rule_band > 0.0  # the rules blend in over the band
+    in_tension, in_compression = mode_rule_weights(p, zero, params) if banded else (0.0, 0.0)
     # rule (b): "the compressive strength/strain is set equal to the uniaxial strength/strain
     # ... if the calculated values from the ultimate surfaces are greater": read in magnitudes
     # a cap, read signed (errata §3) a floor; "equal" applies both, "floor" the errata's
-    rule_b = (np.full_like(sic, -fc) if params.compression_tension_rule == "equal"
-              else np.minimum(sic, -fc))
-    rule_c = np.maximum(sic, ft)
-    if params.mode_rule_band > 0.0:  # the rules blend in over the band (mode_rule_weights)
-        in_tension, in_compression = mode_rule_weights(p, zero, params)
-        out = np.where(comp, (1.0 - in_tension) * sic + in_tension * rule_b, out)
-        out = np.where(tens, (1.0 - in_compression) * sic + in_compression * rule_c, out)
-        return np.where(zero, fallback, out)
-    out = np.where(comp & any_t, rule_b, out)
-    out = np.where(tens & ~any_c, rule_c, out)  # rule (c)
-    return np.where(zero, fallback, out)
+    return mode_rule_strength(p, s[:, None] * p, zero, hint, any_tension, any_compression,
+                              in_tension, in_compression, fc, ft,
+                              params.compression_tension_rule == "equal", banded)
 
 
 def mode_rule_weights(principal: np.ndarray, zero: np.ndarray, params: ConcreteParameters
@@ -75,7 +73,7 @@ def mode_rule_weights(principal: np.ndarray, zero: np.ndarray, params: ConcreteP
     nonzero = np.where(zero, 0.0, principal)
     tension = np.max(np.maximum(nonzero, 0.0), axis=1, keepdims=True)
     compression = np.max(np.maximum(-nonzero, 0.0), axis=1, keepdims=True)
-    return (np.clip(tension / band, 0.0, 1.0), 1.0 - np.clip(compression / band, 0.0, 1.0))
+    return mode_rule_weight(tension, band), 1.0 - mode_rule_weight(compression, band)
 
 
 def equivalent_uniaxial_peak_strains(sigma_ic: ArrayLike, params: ConcreteParameters
@@ -89,10 +87,5 @@ def equivalent_uniaxial_peak_strains(sigma_ic: ArrayLike, params: ConcreteParame
     eps_ic = eps_t sigma_ic / f't (linear branch). Finally |eps_ic| >= |sigma_ic|/E0, so that
     R_E = E0 eps_ic / sigma_ic >= 1 (errata §2.4); where clamped the ascending branch is linear.
     """
-    sig = np.atleast_2d(np.asarray(sigma_ic, dtype=float))
-    R = np.abs(sig) / params.fc
-    ratio = np.where(R >= 1.0, 1.0 + params.peak_strain_slope * (R - 1.0),
-                     (-1.6 * R + 2.25) * R * R + 0.35 * R)
-    mag = np.where(sig < 0.0, ratio * params.eps_c, sig * params.eps_t / params.ft)
-    mag = np.maximum(mag, np.abs(sig) / params.E0)
-    return np.where(sig < 0.0, -mag, mag)
+    return peak_strain(np.atleast_2d(np.asarray(sigma_ic, dtype=float)), params.fc, params.ft,
+                       params.eps_c, params.eps_t, params.E0, params.peak_strain_slope)

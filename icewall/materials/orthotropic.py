@@ -8,10 +8,22 @@ from __future__ import annotations
 
 import numpy as np
 
+from icewall.materials import concrete_formulas as formulas
+from icewall.materials.concrete_formulas import (
+    add_shear_stress,
+    local_normal,
+    principal_angle,
+)
+
 PHI_MIN = 1e-3
 """Floor on the determinant phi of eq. 3.3d (errata §3: guard phi -> 0 as nu -> 0.5)."""
 ANGLE_TOLERANCE = 1e-9
 """In-plane principal-strain radius, relative to the strain size, below which beta is kept."""
+
+
+def major_strain_angle(strain: np.ndarray) -> np.ndarray:
+    """Direction (n,) of the major in-plane principal strain, 0.5 atan2(xy / 2, (xx - yy) / 2)."""
+    return 0.5 * np.arctan2(0.5 * strain[:, 3], 0.5 * (strain[:, 0] - strain[:, 1]))
 
 
 def principal_strain_angle(strain: np.ndarray, previous_angle: np.ndarray) -> np.ndarray:
@@ -21,15 +33,8 @@ def principal_strain_angle(strain: np.ndarray, previous_angle: np.ndarray) -> np
     kept, so directions 1 and 2 keep their damage as the axes rotate; the angle is stored
     unwrapped. Where the in-plane strain is (nearly) isotropic the previous angle is kept.
     """
-    half_difference = 0.5 * (strain[:, 0] - strain[:, 1])
-    half_shear = 0.5 * strain[:, 3]
-    radius = np.hypot(half_difference, half_shear)
-    size = np.abs(strain[:, :2]).max(axis=1) + np.abs(half_shear)
-    major = 0.5 * np.arctan2(half_shear, half_difference)  # direction of the major strain
-    # distance from the previous angle modulo pi/2 (both labellings), in [-pi/4, pi/4)
-    delta = np.mod(major - previous_angle + 0.25 * np.pi, 0.5 * np.pi) - 0.25 * np.pi
-    defined = radius > ANGLE_TOLERANCE * size
-    return np.where(defined, previous_angle + delta, previous_angle)
+    return principal_angle(strain[:, 0], strain[:, 1], strain[:, 3], previous_angle,
+                           major_strain_angle(strain), ANGLE_TOLERANCE)
 
 
 def strain_rotation(angle: np.ndarray) -> np.ndarray:
@@ -55,16 +60,14 @@ def local_normal_components(vector: np.ndarray, angle: np.ndarray, shear_factor:
     shear_factor = 1 for engineering strain (T_eps rows 1-3), 2 for stress (T_sigma rows 1-3).
     """
     c, s = np.cos(angle), np.sin(angle)
-    cc, ss, cs = c * c, s * s, shear_factor * c * s
-    xx, yy, zz, xy = vector[:, 0], vector[:, 1], vector[:, 2], vector[:, 3]
-    return np.stack([cc * xx + ss * yy + cs * xy, ss * xx + cc * yy - cs * xy, zz], axis=1)
+    return np.stack(local_normal(vector[:, 0], vector[:, 1], vector[:, 2], vector[:, 3], c, s,
+                                 shear_factor), axis=1)
 
 
 def local_shear_strain(strain: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Engineering shear strain (n,) in the local axes (T_eps row 4); zero in principal axes."""
     c, s = np.cos(angle), np.sin(angle)
-    return (2.0 * c * s * (strain[:, 1] - strain[:, 0])
-            + (c * c - s * s) * strain[:, 3])
+    return formulas.local_shear_strain(strain[:, 0], strain[:, 1], strain[:, 3], c, s)
 
 
 def global_stress(principal: np.ndarray, angle: np.ndarray,
@@ -72,13 +75,11 @@ def global_stress(principal: np.ndarray, angle: np.ndarray,
     """sigma_g = T_eps^T [s1, s2, s3, tau] (n, 4); the local shear stress tau (n,) is zero
     unless given (reset to zero for each increment, §3.2.6)."""
     c, s = np.cos(angle), np.sin(angle)
-    cc, ss, cs = c * c, s * s, c * s
-    s1, s2, s3 = principal[:, 0], principal[:, 1], principal[:, 2]
-    stress = np.stack([cc * s1 + ss * s2, ss * s1 + cc * s2, s3, cs * (s1 - s2)], axis=1)
+    stress = np.stack(formulas.global_stress(principal[:, 0], principal[:, 1], principal[:, 2],
+                                             c, s), axis=1)
     if shear is not None:
-        stress[:, 0] -= 2.0 * cs * shear
-        stress[:, 1] += 2.0 * cs * shear
-        stress[:, 3] += (cc - ss) * shear
+        stress[:, 0], stress[:, 1], stress[:, 3] = add_shear_stress(
+            stress[:, 0], stress[:, 1], stress[:, 3], shear, c, s)
     return stress
 
 
@@ -96,19 +97,12 @@ def orthotropic_normal_stiffness(modulus: np.ndarray, poisson: np.ndarray) -> np
     Eq. 3.3a-c: eta_ij^2 = nu_i nu_j. Eq. 3.3d / errata 1.1: phi = 1 - eta12^2 - eta23^2 -
     eta31^2 - 2 eta12 eta23 eta31 (printed 2 eta31^3); floored at PHI_MIN (errata §3).
     """
-    E1, E2, E3 = modulus[:, 0], modulus[:, 1], modulus[:, 2]
-    eta12 = np.sqrt(poisson[:, 0] * poisson[:, 1])
-    eta23 = np.sqrt(poisson[:, 1] * poisson[:, 2])
-    eta31 = np.sqrt(poisson[:, 2] * poisson[:, 0])
-    phi = 1.0 - eta12**2 - eta23**2 - eta31**2 - 2.0 * eta12 * eta23 * eta31
-    inverse_phi = 1.0 / np.maximum(phi, PHI_MIN)
     C = np.empty(modulus.shape[:1] + (3, 3))
-    C[:, 0, 0] = E1 * (1.0 - eta23**2) * inverse_phi
-    C[:, 1, 1] = E2 * (1.0 - eta31**2) * inverse_phi
-    C[:, 2, 2] = E3 * (1.0 - eta12**2) * inverse_phi
-    C[:, 0, 1] = C[:, 1, 0] = np.sqrt(E1 * E2) * (eta31 * eta23 + eta12) * inverse_phi
-    C[:, 0, 2] = C[:, 2, 0] = np.sqrt(E1 * E3) * (eta12 * eta23 + eta31) * inverse_phi
-    C[:, 1, 2] = C[:, 2, 1] = np.sqrt(E2 * E3) * (eta12 * eta31 + eta23) * inverse_phi
+    (C[:, 0, 0], C[:, 1, 1], C[:, 2, 2], C[:, 0, 1], C[:, 0, 2],
+     C[:, 1, 2]) = formulas.normal_stiffness(modulus[:, 0], modulus[:, 1], modulus[:, 2],
+                                             poisson[:, 0], poisson[:, 1], poisson[:, 2],
+                                             PHI_MIN)
+    C[:, 1, 0], C[:, 2, 0], C[:, 2, 1] = C[:, 0, 1], C[:, 0, 2], C[:, 1, 2]
     return C
 
 
@@ -139,14 +133,3 @@ def global_moduli(normal_stiffness: np.ndarray, shear_modulus: np.ndarray, angle
     local[:, 3, 3] = shear_modulus
     T = strain_rotation(angle)
     return np.matmul(T.transpose(0, 2, 1), np.matmul(local, T))
-
-
-def compression_poisson_ratio(strain_ratio: np.ndarray, nu0: float) -> np.ndarray:
-    """Eq. 3.19: nu = nu0 (1 + 1.3763 a - 5.36 a^2 + 8.586 a^3), a = |eps_iu| / |eps_ic|."""
-    a = np.minimum(strain_ratio, 10.0)  # nu is capped below 0.5 long before (3.19 at a=1: 2.6 nu0)
-    return nu0 * (1.0 + a * (1.3763 + a * (-5.36 + a * 8.586)))
-
-
-def tension_poisson_ratio(strain_ratio: np.ndarray, nu0: float) -> np.ndarray:
-    """Eq. 3.20: nu0 up to a = 0.5, then linear to zero at a = 1, zero beyond."""
-    return nu0 * np.clip(2.0 * (1.0 - strain_ratio), 0.0, 1.0)

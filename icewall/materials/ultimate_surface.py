@@ -17,6 +17,22 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from icewall.materials import concrete_formulas as formulas
+from icewall.materials.concrete_formulas import (
+    MAX_SCALE,
+    NEWTON_ITERATIONS,
+    NEWTON_TOLERANCE,
+    elliptic_radius,
+    elliptic_radius_slope,
+    lode_arguments,
+    meridian,
+    newton_start,
+    newton_step,
+    ray_function,
+    ray_value,
+    unit_ray,
+)
+
 SQ215 = float(np.sqrt(2.0 / 15.0))  # tau_bar / sigma for a uniaxial state
 Coef = tuple[float, float, float]
 
@@ -37,10 +53,6 @@ SET_B_CONTROL: dict[str, object] = {
     "fcb_ratio": 1.20, "f1": _P1, "f2": _P2, "name": "B: ANSYS TB,CONCR defaults",
     "source": "ANSYS TB,CONCR defaults attributed to Willam & Warnke (fcb=1.2, f1=1.45, "
               "f2=1.725 on sigma_h=sqrt(3) f'c); errata §2.2 set B, refitted through f't"}
-
-
-def _poly(c: Coef, x: np.ndarray) -> np.ndarray:
-    return c[0] + c[1] * x + c[2] * x * x
 
 
 def _real_roots(c: Coef) -> list[float]:
@@ -85,7 +97,7 @@ class WillamWarnkeSurface:
     def meridians(self, sigma_bar: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """(r1, r2) at sigma_bar (eq. 3.18), held constant below ``sigma_limit``."""
         s = np.maximum(np.asarray(sigma_bar, dtype=float), self.sigma_limit)
-        return _poly(self.a, s), _poly(self.b, s)
+        return meridian(self.a, s), meridian(self.b, s)
 
     @classmethod
     def from_control_points(cls, ft_ratio: float, fcb_ratio: float = 1.20,
@@ -131,12 +143,9 @@ def _sorted(principal: ArrayLike) -> np.ndarray:
 def octahedral_invariants(principal: ArrayLike, fc: float) -> tuple[np.ndarray, np.ndarray]:
     """(sigma_bar, tau_bar): eq. 3.12a and eq. 3.12b corrected per errata §1.1,
     tau_bar = sqrt(s_ij s_ij / 5) / f'c (uniaxial compression -> (-1/3, sqrt(2/15)))."""
-    p = _sorted(principal)
-    s1, s2, s3 = p[:, 0], p[:, 1], p[:, 2]  # columns, not axis-1 reductions: several times faster
-    m = (s1 + s2 + s3) / 3.0
-    d1, d2, d3 = s1 - m, s2 - m, s3 - m  # eq. 3.14
-    # eq. 3.12a; eq. 3.12b corrected per errata §1.1: sqrt(s_ij s_ij / 5) / f'c
-    return m / fc, np.sqrt((d1 * d1 + d2 * d2 + d3 * d3) / 5.0) / fc
+    p = _sorted(principal)  # columns, not axis-1 reductions: several times faster
+    mean, tau = formulas.octahedral_invariants(p[:, 0], p[:, 1], p[:, 2])
+    return mean / fc, tau / fc
 
 
 def lode_angle(principal: ArrayLike) -> np.ndarray:
@@ -145,43 +154,8 @@ def lode_angle(principal: ArrayLike) -> np.ndarray:
     0 for uniaxial tension / equal biaxial compression, 60 deg for uniaxial compression.
     Computed as atan2(sqrt3 (s2 - s3), 2 s1 - s2 - s3); hydrostatic states return 0."""
     p = _sorted(principal)
-    s1, s2, s3 = p[:, 0], p[:, 1], p[:, 2]
-    # eq. 3.13 corrected per errata §1.1 (2 s1 - s2 - s3, sqrt2 in the denominator), in atan2
-    # form: |(x, y)| = sqrt2 sqrt(q), so cos theta = x/|(x, y)|; accurate near 0 and 60 deg
-    x, y = 2.0 * s1 - s2 - s3, np.sqrt(3.0) * (s2 - s3)
-    ok = np.hypot(x, y) > 1e-12 * np.maximum(np.abs(s1), np.abs(s3))  # max |s_i| (sorted)
-    return np.where(ok, np.clip(np.arctan2(y, x), 0.0, np.pi / 3.0), 0.0)
-
-
-def _elliptic_radius(c: np.ndarray, r1: np.ndarray, r2: np.ndarray,
-                     dr1: np.ndarray | None = None, dr2: np.ndarray | None = None
-                     ) -> tuple[np.ndarray, np.ndarray | None]:
-    """Core of `meridian_radius` at c = cos theta: (r, dr), dr the derivative of r for the
-    meridian derivatives dr1, dr2 (None unless both are given; one-sided at the clamps)."""
-    pos = r2 > 0.0
-    half_r2 = 0.5 * r2
-    r1c = np.clip(r1, half_r2, r2)  # r1 = minimum radius (glossary corrected, errata §1.1)
-    r12 = r2 * r2 - r1c * r1c  # eq. 3.17
-    q = 4.0 * r12 * c * c
-    root = np.sqrt(np.maximum(q + 5.0 * r1c * r1c - 4.0 * r1c * r2, 0.0))
-    # eq. 3.16 corrected per errata §1.1 (numerator 2 r2 (r2^2 - r1^2) cos theta, not 2 r1 r2)
-    e = 2.0 * r1c - r2
-    num = 2.0 * r2 * r12 * c + r2 * e * root
-    den = np.where(pos & (q + e * e > 0.0), q + e * e, 1.0)
-    r = np.where(pos, num / den, np.minimum(r1, r2))
-    if dr1 is None or dr2 is None:
-        return r, None
-    # d/dt of num / den with r1c = clip(r1, r2/2, r2); the 1/sqrt term is dropped where the
-    # root vanishes (only r1 = r2/2 at theta = 60 deg, where its factor 2 r1 - r2 is 0 too)
-    dr1c = np.where(r1 < half_r2, 0.5 * dr2, np.where(r1 > r2, dr2, dr1))
-    dr12 = 2.0 * (r2 * dr2 - r1c * dr1c)
-    dq = 4.0 * dr12 * c * c
-    de = 2.0 * dr1c - dr2
-    drad = dq + 10.0 * r1c * dr1c - 4.0 * (dr1c * r2 + r1c * dr2)
-    droot = np.where(root > 0.0, 0.5 * drad / np.where(root > 0.0, root, 1.0), 0.0)
-    dnum = 2.0 * c * (dr2 * r12 + r2 * dr12) + (dr2 * e + r2 * de) * root + r2 * e * droot
-    dden = dq + 2.0 * e * de
-    return r, np.where(pos, (dnum - r * dden) / den, np.where(r1 < r2, dr1, dr2))
+    x, y, defined = lode_arguments(p[:, 0], p[:, 1], p[:, 2])
+    return formulas.lode_angle(np.arctan2(y, x), defined)
 
 
 def meridian_radius(theta: ArrayLike, r1: ArrayLike, r2: ArrayLike, *,
@@ -193,7 +167,7 @@ def meridian_radius(theta: ArrayLike, r1: ArrayLike, r2: ArrayLike, *,
     Where r2 <= 0 (beyond the apex) r = min(r1, r2) <= 0, i.e. outside the surface.
     """
     th, r1a, r2a = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (theta, r1, r2)))
-    r, _ = _elliptic_radius(np.cos(th), r1a, r2a)
+    r = elliptic_radius(np.cos(th), r1a, r2a)
     if not return_clamped:
         return r
     tol = 1e-12 * np.abs(r2a)
@@ -214,32 +188,13 @@ def _ray_function(t: np.ndarray, sb: np.ndarray, tb: np.ndarray, c: np.ndarray,
     """f(t) = t tau_bar - r(theta, r1(t sigma_bar), r2(t sigma_bar)) on the unit ray (sigma_bar,
     tau_bar, cos theta) and, with ``slope``, df/dt (the meridians are held below ``sigma_limit``:
     zero slope there)."""
-    x = t * sb
-    s = np.maximum(x, surface.sigma_limit)
-    a, b = surface.a, surface.b
     if not slope:
-        return t * tb - _elliptic_radius(c, _poly(a, s), _poly(b, s))[0], None
-    ds = np.where(x >= surface.sigma_limit, sb, 0.0)
-    r, dr = _elliptic_radius(c, _poly(a, s), _poly(b, s), (a[1] + 2.0 * a[2] * s) * ds,
-                             (b[1] + 2.0 * b[2] * s) * ds)
-    return t * tb - r, tb - dr  # type: ignore[operator]
-
-
-def _meridian_root(coef: tuple[float, ...] | tuple[np.ndarray, ...], sb: np.ndarray,
-                   tb: np.ndarray, sigma_limit: float, cap: float) -> np.ndarray:
-    """Smallest t > 0 with t tau_bar = m(t sigma_bar) for the meridian m = k0 + k1 s + k2 s^2
-    (k0 > 0), held at ``sigma_limit`` below it; ``cap`` where there is none below the cap."""
-    k0, k1, k2 = coef
-    qa, qb = k2 * sb * sb, k1 * sb - tb  # qa t^2 + qb t + k0 = 0 above sigma_limit
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        t = 2.0 * k0 / (-qb + np.sqrt(qb * qb - 4.0 * qa * k0))  # the smaller root, if real
-        held = (k0 + (k1 + k2 * sigma_limit) * sigma_limit) / tb  # t tau_bar = m(sigma_limit)
-        t = np.where(t * sb >= sigma_limit, t, np.where(held * sb < sigma_limit, held, cap))
-    return np.where((t > 0.0) & (t < cap), t, cap)  # NaN -> cap
+        return ray_value(t, sb, tb, c, surface.a, surface.b, surface.sigma_limit), None
+    return ray_function(t, sb, tb, c, surface.a, surface.b, surface.sigma_limit)
 
 
 def strength_scale(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface,
-                   max_scale: float = 100.0, iterations: int = 60, *,
+                   max_scale: float = MAX_SCALE, iterations: int = NEWTON_ITERATIONS, *,
                    return_capped: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """s > 0 with f(s sigma) = 0 on the proportional ray (vectorised safeguarded Newton).
 
@@ -261,46 +216,30 @@ def strength_scale(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface
     error is then ~1e-24 t, i.e. round-off) or a bracket that narrow; ``iterations`` bounds
     the steps (each at worst a bisection; the bracket midpoint is returned after the last).
     """
-    tol = 1e-12
     p = _sorted(principal) / fc
-    mag = np.maximum(np.maximum(np.abs(p[:, 0]), np.abs(p[:, 2])), 1e-12)  # max |p_i| (sorted)
-    d = p / mag[:, None]  # unit direction, max-norm 1
-    sb, tb = octahedral_invariants(d, 1.0)
-    c = np.cos(lode_angle(d))
+    sb, tb, mag, x, y, defined = unit_ray(p[:, 0], p[:, 1], p[:, 2])
+    c = np.cos(formulas.lode_angle(np.arctan2(y, x), defined))
     cap = float(max_scale)
     meets = _ray_function(np.full_like(mag, cap), sb, tb, c, surface, slope=False)[0] >= 0.0
     t_out = np.full_like(mag, cap)
     rows = np.nonzero(meets)[0]
     sb, tb, c = sb[rows], tb[rows], c[rows]
-    a, b, lim = surface.a, surface.b, surface.sigma_limit
-    hi = _meridian_root(b, sb, tb, lim, cap)
-    w = 2.0 * (1.0 - c)
-    x = np.minimum(_meridian_root(tuple(ai + w * (bi - ai) for ai, bi in zip(a, b, strict=True)),
-                                  sb, tb, lim, cap), hi)
-    lo = np.zeros_like(x)
-    step_old, step = np.full_like(x, cap), np.full_like(x, cap)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t, hi = newton_start(sb, tb, c, surface.a, surface.b, surface.sigma_limit, cap)
+    lo = np.zeros_like(t)
+    step_old, step = np.full_like(t, cap), np.full_like(t, cap)
     for _ in range(iterations):
         if rows.size == 0:
             break
-        fx, dfx = _ray_function(x, sb, tb, c, surface)
-        above = fx >= 0.0
-        hi, lo = np.where(above, x, hi), np.where(above, lo, x)
+        fx, dfx = _ray_function(t, sb, tb, c, surface)
         with np.errstate(divide="ignore", invalid="ignore"):
-            newton = fx / dfx  # type: ignore[operator]
-        x_new = x - newton
-        positive = dfx > 0.0  # type: ignore[operator]
-        # a step below tol t may round onto lo or hi: take it before the bracket test, and stop
-        small = positive & (np.abs(newton) <= tol * x)
-        ok = positive & (x_new > lo) & (x_new < hi) & (np.abs(newton) <= 0.5 * np.abs(step_old))
-        mid = 0.5 * (lo + hi)
-        step_old, step = step, np.where(ok, newton, x - mid)
-        x = np.where(small | ok, x_new, mid)
-        done = small | (hi - lo <= tol * hi)
+            t, lo, hi, step_old, step, done = newton_step(t, fx, dfx, lo, hi, step_old, step,
+                                                          NEWTON_TOLERANCE)
         if done.any():
-            t_out[rows[done]] = x[done]
+            t_out[rows[done]] = t[done]
             keep = ~done
             rows, sb, tb, c = rows[keep], sb[keep], tb[keep], c[keep]
-            x, lo, hi, step_old, step = x[keep], lo[keep], hi[keep], step_old[keep], step[keep]
+            t, lo, hi, step_old, step = t[keep], lo[keep], hi[keep], step_old[keep], step[keep]
     t_out[rows] = 0.5 * (lo + hi)  # not converged within ``iterations``: bracket midpoint
     return (t_out / mag, ~meets) if return_capped else t_out / mag
 
@@ -351,10 +290,10 @@ def strength_scale_gradient(principal: ArrayLike, scale: ArrayLike, fc: float,
     held = np.maximum(sigma_bar, surface.sigma_limit)
     above = sigma_bar >= surface.sigma_limit
     a, b = surface.a, surface.b
-    _, dr_dsigma = _elliptic_radius(c, _poly(a, held), _poly(b, held),
+    _, dr_dsigma = elliptic_radius_slope(c, meridian(a, held), meridian(b, held),
                                     np.where(above, a[1] + 2.0 * a[2] * held, 0.0),
                                     np.where(above, b[1] + 2.0 * b[2] * held, 0.0))
-    dr_dc = _radius_slope_in_cos(c, _poly(a, held), _poly(b, held))
+    dr_dc = _radius_slope_in_cos(c, meridian(a, held), meridian(b, held))
     gradient_sorted = dtau - dr_dc[:, None] * dc - dr_dsigma[:, None] / 3.0  # type: ignore[index]
     gradient = np.empty_like(p)
     np.put_along_axis(gradient, order, gradient_sorted, axis=1)

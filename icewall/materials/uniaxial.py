@@ -17,6 +17,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from icewall.materials import concrete_formulas as formulas
+from icewall.materials.concrete_formulas import decay_exponent
+
 #: Lower bound of the returned secant modulus, as a fraction of E0 (keeps stiffness matrices
 #: non-singular far down the softening branch). It applies to the secant only: use the returned
 #: stress, not ``secant * strain``, which would exceed the stress there.
@@ -35,12 +38,9 @@ def saenz_secant(strain: ArrayLike, E0: ArrayLike, peak_stress: ArrayLike,
     (eq. 3.10). R_E is clamped to >= 1 (below 1 the denominator can vanish; errata §2.4 asks
     R_E >= 1). With ``cap`` the secant is limited to E0 (errata §3, "Saenz branch").
     """
-    eps, E0a = _mag(strain), np.asarray(E0, dtype=float)
-    eps_p = np.asarray(peak_strain, dtype=float)
-    R_E = np.maximum(E0a * eps_p / np.asarray(peak_stress, dtype=float), 1.0)  # eq. 3.10
-    x = eps / eps_p
-    denom = 1.0 + (R_E - 2.0) * x + x * x  # eq. 3.9 denominator, >= 3/4 for R_E >= 1
-    sec = E0a / denom
+    E0a = np.asarray(E0, dtype=float)
+    sec = formulas.saenz_secant(_mag(strain), E0a, np.asarray(peak_stress, dtype=float),
+                                np.asarray(peak_strain, dtype=float))
     return np.minimum(sec, E0a) if cap else sec
 
 
@@ -62,9 +62,9 @@ def softening_stress(strain: ArrayLike, peak_stress: ArrayLike, peak_strain: Arr
     strain of the branch itself (eps_t in tension, not eps_c). Strains below the peak are
     clipped to it (returns the peak).
     """
-    over = np.clip(_mag(strain) - np.asarray(peak_strain, dtype=float), 0.0, 1e300)
     with np.errstate(over="ignore"):
-        arg = np.asarray(decay, dtype=float) * over
+        arg = decay_exponent(_mag(strain), np.asarray(peak_strain, dtype=float),
+                             np.asarray(decay, dtype=float))
     return np.asarray(peak_stress, dtype=float) * np.exp(-arg)
 
 
@@ -82,18 +82,12 @@ def softening_energy(peak_stress: ArrayLike, decay: ArrayLike) -> np.ndarray:
 
 def _envelope(strain: ArrayLike, E0: ArrayLike, peak_stress: ArrayLike, peak_strain: ArrayLike,
               decay: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    eps = _mag(strain)
-    E0a = np.asarray(E0, dtype=float)
-    eps_p = np.asarray(peak_strain, dtype=float)
-    sec_up = saenz_secant(np.minimum(eps, eps_p), E0a, peak_stress, eps_p, cap=True)
-    s_down = softening_stress(eps, peak_stress, eps_p, decay)
-    rising = eps <= eps_p
-    stress = np.where(rising, sec_up * np.minimum(eps, eps_p), s_down)
+    eps, eps_p = _mag(strain), np.asarray(peak_strain, dtype=float)
+    with np.errstate(over="ignore"):
+        decayed = np.exp(-decay_exponent(eps, eps_p, np.asarray(decay, dtype=float)))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # clipped below
-        sec_down = s_down / np.where(eps > 0.0, eps, 1.0)
-    secant = np.where(rising, sec_up, sec_down)
-    secant = np.clip(secant, SECANT_FLOOR * E0a, E0a)
-    return stress, secant
+        return formulas.envelope(eps, np.asarray(peak_stress, dtype=float), eps_p,
+                                 np.asarray(E0, dtype=float), decayed, SECANT_FLOOR)
 
 
 def compression_envelope(strain: ArrayLike, E0: ArrayLike, peak_stress: ArrayLike,
