@@ -1,35 +1,27 @@
 """Numba kernels of the concrete update and moduli, point by point (used by concrete_compiled).
 
 The formulas of the law are concrete_formulas', the same functions the NumPy modules call on
-arrays, compiled here (register_jitable; its select, clip and remainder as scalar code): the
+arrays, compiled by numba (concrete_jit registers them) where these kernels call them. The
 kernels only loop over points and directions, carry the state between the steps of Fig. 3.12
 and reduce over a point's directions, without fastmath, so that the results are NumPy's bit
 for bit. NumPy evaluates exp and arctan2 with SIMD code of its own (AVX-512F, SVML) that libm
 does not reproduce, so the update runs in four passes over the points (trial, ray, strength,
-finish) and concrete_compiled applies NumPy's exp and arctan2 in between. Copied, as they are
-not formulas but NumPy's summation orders: np.einsum's (a0 b0 + a2 b2) + a1 b1 (its AVX2/AVX-512
-lanes) in the trial stress and the 4x4 BLAS matmul, a chain of FMAs, in the moduli. The Newton
-steps on the strength surface go in lockstep over the rays, as in NumPy, in a loop free of
-branches that LLVM vectorises (4x faster than ray by ray).
+finish) and concrete_compiled applies NumPy's exp and arctan2 in between. Copied here, as
+they are NumPy's summation orders and no formulas: np.einsum's (a0 b0 + a2 b2) + a1 b1 (its
+AVX2/AVX-512 lanes) in the trial stress, the 4x4 BLAS matmul (a chain of FMAs) in the moduli.
+The Newton steps on the strength surface go in lockstep over the rays, as in NumPy, in a loop
+free of branches that LLVM vectorises (4x faster than ray by ray).
 This module imports numba; only concrete_compiled imports it. numba's on-disk cache does not
-notice a change in a callee of another file: every kernel's cache key holds the digest of
-concrete_formulas' source (`FormulaKeyedCache`).
+notice a change in a callee of another file: each kernel's cache key holds the digest of
+concrete_formulas and concrete_jit (`concrete_jit.jit`).
 """
 
 from __future__ import annotations
 
-import hashlib
-import inspect
 import math
-from collections.abc import Callable
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numba import njit
-from numba.core import types
-from numba.core.caching import FunctionCache
-from numba.extending import intrinsic, overload, register_jitable
 
 from icewall.materials import concrete_formulas as law
 from icewall.materials.concrete_formulas import (
@@ -58,61 +50,7 @@ from icewall.materials.concrete_formulas import (
     shear_modulus,
     zero_component,
 )
-
-FORMULAS_DIGEST = hashlib.sha256(Path(law.__file__).read_bytes()).hexdigest()
-
-
-class FormulaKeyedCache(FunctionCache):
-    """numba's on-disk cache of a kernel, keyed also by FORMULAS_DIGEST: numba stamps the
-    kernel's own file only, and would load a kernel compiled from old formulas."""
-
-    def _index_key(self, sig: Any, codegen: Any) -> tuple:
-        return (*super()._index_key(sig, codegen), FORMULAS_DIGEST)
-
-
-def jit(function: Callable) -> Any:
-    """A cached kernel with NumPy's IEEE semantics (1/0 = inf, no raise)."""
-    dispatcher = njit(error_model="numpy")(function)
-    dispatcher._cache = FormulaKeyedCache(function)  # what cache=True sets, with our key
-    return dispatcher
-
-
-@intrinsic
-def _select(typingctx, condition, if_true, if_false):
-    """LLVM's select: both sides evaluated, as in np.where, and no branch (loops vectorise)."""
-    kind = typingctx.unify_types(if_true, if_false)
-
-    def codegen(context, builder, signature, args):
-        flag = context.cast(builder, args[0], condition, types.boolean)
-        return builder.select(flag, context.cast(builder, args[1], if_true, kind),
-                              context.cast(builder, args[2], if_false, kind))
-    return kind(condition, if_true, if_false), codegen
-
-
-@overload(law.select)
-def _overload_select(condition, if_true, if_false):
-    return lambda condition, if_true, if_false: _select(condition, if_true, if_false)
-
-
-@overload(law.clip)
-def _overload_clip(x, low, high):
-    def clip(x, low, high):
-        x = _select((x != x) | (x > low), x, low)
-        return _select((x != x) | (x < high), x, high)
-    return clip
-
-
-@overload(law.remainder)
-def _overload_remainder(x, y):
-    return lambda x, y: x % y  # CPython's float %: fmod, + y where the signs differ
-
-
-for _formula in vars(law).values():  # the formulas compile where a kernel calls them
-    if (inspect.isfunction(_formula) and _formula.__module__ == law.__name__
-            and _formula not in (law.select, law.clip, law.remainder)):
-        register_jitable(inline="always" if _formula.__name__ in (
-            "newton_step", "ray_function", "elliptic_radius_slope", "_elliptic_terms",
-            "meridian") else "never")(_formula)
+from icewall.materials.concrete_jit import fma, jit
 
 # parameter tuple (concrete_compiled.parameter_tuple), with the NumPy modules' constants: a
 # cached kernel would keep the values of constants imported from other files
@@ -127,14 +65,6 @@ N_WORK = 7
 # rows of the (n, N_FLAGS, 3) flags: per direction; B_RAY: any direction loads, theta defined
 B_LOADING, B_SIGN_CHANGE, B_RAY = range(3)
 N_FLAGS = 3
-
-
-@intrinsic
-def fma(typingctx, a, b, c):
-    """a b + c rounded once (the BLAS kernels' vfmadd)."""
-    def codegen(context, builder, signature, args):
-        return builder.fma(*args)
-    return types.float64(types.float64, types.float64, types.float64), codegen
 
 
 @njit(error_model="numpy", inline="always")
