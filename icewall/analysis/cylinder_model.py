@@ -26,6 +26,7 @@ from icewall.deck.analysis_options import Analysis
 from icewall.deck.schema import Concrete, Control, Interface
 from icewall.errors import ConvergenceError
 from icewall.fem.assembly import Assembler
+from icewall.fem.dofs import DofMap
 from icewall.fem.kinematics import element_kinematics, gauss_point_spacing
 from icewall.fem.quadrature import gauss_rule
 from icewall.mesh.mesh import CONCRETE, Mesh
@@ -80,23 +81,6 @@ class CylinderDeck:
     loads: _Loads
 
 
-class PlatenNumbering:
-    """Equations of the quarter mesh: two per node, one u_z shared by the loading head."""
-
-    def __init__(self, n_nodes: int, head: np.ndarray) -> None:
-        eq = np.arange(2 * n_nodes).reshape(n_nodes, 2)
-        eq[head, 1] = eq[head[0], 1]
-        _, compact = np.unique(eq, return_inverse=True)
-        self.node_equations = compact.reshape(n_nodes, 2)
-        self.n_equations = int(compact.max()) + 1
-
-    def element_dofs(self, cells: np.ndarray) -> np.ndarray:
-        return self.node_equations[np.asarray(cells)].reshape(len(cells), -1)
-
-    def equations(self, nodes: np.ndarray, direction: int) -> np.ndarray:
-        return self.node_equations[np.asarray(nodes, dtype=int), direction]
-
-
 @dataclass(frozen=True)
 class CylinderModel:
     """The assembled quarter cylinder and the problem `follow_path` solves."""
@@ -104,7 +88,7 @@ class CylinderModel:
     case: CylinderCase
     deck: CylinderDeck
     mesh: Mesh
-    numbering: PlatenNumbering
+    numbering: DofMap  # one u_z equation shared by the loading head
     structure: Structure
     problem: Problem
     gauss_spacing: np.ndarray  # (n_el,) h_c of eq. 4.3
@@ -134,7 +118,7 @@ def build_cylinder(case: CylinderCase, **analysis: Any) -> CylinderModel:
     mesh = rectangle_mesh(0.0, 0.5 * DIAMETER, 0.0, 0.5 * HEIGHT, case.nx, case.ny, "quad8",
                           region_name="concrete", kind=CONCRETE)
     head = mesh.node_sets["top"]
-    numbering = PlatenNumbering(mesh.n_nodes, head)
+    numbering = DofMap(mesh.n_nodes, shared=((head, 1),))
     kin = element_kinematics(mesh.points, mesh.cells, "quad8", gauss_rule(GAUSS),
                              "axisymmetric", 1.0, numbering)
     spacing = gauss_point_spacing(mesh.points, mesh.cells, GAUSS)

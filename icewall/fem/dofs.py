@@ -6,14 +6,18 @@ import numpy as np
 
 
 class DofMap:
-    """Equation numbering of the 2 dofs per node; tied slave nodes share their master's equations.
+    """Equation numbering of the 2 dofs per node; tied slave nodes share their master's equations,
+    and each `shared` set of node dofs shares one equation (a rigid head moving as one).
 
-    Without ties the numbering is the global dof numbering, equation = 2 * node + direction.
-    With ties the non-slave nodes keep their order and are numbered consecutively. Chains of
-    ties (a slave that is also a master) resolve to the root master.
+    Without ties or shared sets the numbering is the global dof numbering, equation = 2 * node +
+    direction. Otherwise the independent dofs keep their order and are numbered consecutively.
+    Chains of ties (a slave that is also a master) resolve to the root master. `shared` holds
+    (nodes, direction) pairs: those nodes' dofs in that direction take the equation of the
+    first node's.
     """
 
-    def __init__(self, n_nodes: int, ties: np.ndarray | None = None) -> None:
+    def __init__(self, n_nodes: int, ties: np.ndarray | None = None,
+                 shared: tuple[tuple[np.ndarray, int], ...] = ()) -> None:
         self.n_nodes = int(n_nodes)
         ties = np.zeros((0, 2), dtype=int) if ties is None else np.asarray(ties, dtype=int)
         ties = ties.reshape(-1, 2)
@@ -24,23 +28,18 @@ class DofMap:
         if np.unique(ties[:, 1]).size != ties.shape[0]:
             raise ValueError("a slave node is tied to more than one master")
         self.ties = ties
-        root = np.arange(self.n_nodes)
-        root[ties[:, 1]] = ties[:, 0]
-        # resolve chains master <- slave <- slave ... by pointer jumping (log2 n steps)
-        for _ in range(int(np.log2(max(self.n_nodes, 2))) + 2):
-            nxt = root[root]
-            if np.array_equal(nxt, root):
-                break
-            root = nxt
-        is_slave = np.zeros(self.n_nodes, dtype=bool)
-        is_slave[ties[:, 1]] = True
-        if np.any(is_slave[root]):
-            raise ValueError("node ties contain a cycle")
-        is_master = root == np.arange(self.n_nodes)
-        rank = np.cumsum(is_master) - 1  # equation-node number of each independent node
-        node_rank = rank[root]
-        self.node_equations = 2 * node_rank[:, None] + np.arange(2)  # (n_nodes, 2)
-        self.n_equations = int(2 * is_master.sum())
+        root = _tie_roots(self.n_nodes, ties)
+        dof_root = (2 * root[:, None] + np.arange(2)).ravel()
+        for nodes, direction in shared:
+            dofs = 2 * np.asarray(nodes, dtype=int).ravel() + int(direction)
+            if dofs.size and (dofs.min() < 0 or dofs.max() >= 2 * self.n_nodes):
+                raise ValueError(f"shared node ids out of range [0, {self.n_nodes})")
+            if dofs.size:
+                dof_root[np.isin(dof_root, dof_root[dofs])] = dof_root[dofs[0]]
+        is_master = dof_root == np.arange(dof_root.size)
+        rank = np.cumsum(is_master) - 1  # equation number of each independent dof
+        self.node_equations = rank[dof_root].reshape(self.n_nodes, 2)
+        self.n_equations = int(is_master.sum())
 
     def equations(self, nodes: np.ndarray, direction: int | None = None) -> np.ndarray:
         """Equation ids of `nodes` in `direction` (0 = x, 1 = y) or both (flattened, node-major)."""
@@ -60,3 +59,20 @@ class DofMap:
         """Equation vector (n_eq,) from a nodal vector (2 * n_nodes,), summing tied nodes."""
         f = np.asarray(f_nodal, dtype=float).reshape(-1)
         return np.bincount(self.node_equations.ravel(), weights=f, minlength=self.n_equations)
+
+
+def _tie_roots(n_nodes: int, ties: np.ndarray) -> np.ndarray:
+    """The root master of every node under `ties` (master, slave), by pointer jumping (log2 n
+    steps); a cycle is an error."""
+    root = np.arange(n_nodes)
+    root[ties[:, 1]] = ties[:, 0]
+    for _ in range(int(np.log2(max(n_nodes, 2))) + 2):
+        nxt = root[root]
+        if np.array_equal(nxt, root):
+            break
+        root = nxt
+    is_slave = np.zeros(n_nodes, dtype=bool)
+    is_slave[ties[:, 1]] = True
+    if np.any(is_slave[root]):
+        raise ValueError("node ties contain a cycle")
+    return root

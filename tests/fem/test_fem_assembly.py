@@ -72,6 +72,28 @@ def test_dofmap_ties_share_master_equations_and_sum_forces():
     np.testing.assert_array_equal(u[5], u[1])
 
 
+def test_dofmap_shared_dofs_take_one_equation_in_their_direction_only():
+    # nodes 0..4; the y dofs of nodes 3, 1, 4 move as one (a rigid head), led by node 3
+    dm = DofMap(5, shared=((np.array([3, 1, 4]), 1),))
+    assert dm.n_equations == 8
+    # independent dofs in global order: 0x 0y 1x 2x 2y 3x 3y 4x -> 0..7; 1y and 4y take 3y's
+    np.testing.assert_array_equal(dm.node_equations,
+                                  [[0, 1], [2, 6], [3, 4], [5, 6], [7, 6]])
+    f = np.arange(10, dtype=float)
+    assert dm.restrict(f)[6] == f[3] + f[7] + f[9]  # the head's force: the sum of its nodes'
+    np.testing.assert_array_equal(dm.expand(np.arange(8.0))[[1, 3, 4], 1], [6.0, 6.0, 6.0])
+
+
+def test_dofmap_shared_dofs_on_tied_nodes_follow_the_master():
+    # node 4 tied to 1; the x dofs of nodes 4 and 2 shared: 1x, 2x and 4x are one equation
+    dm = DofMap(5, ties=np.array([[1, 4]]), shared=((np.array([4, 2]), 0),))
+    assert dm.n_equations == 7
+    assert dm.node_equations[4, 0] == dm.node_equations[1, 0] == dm.node_equations[2, 0]
+    assert dm.node_equations[4, 1] == dm.node_equations[1, 1] != dm.node_equations[2, 1]
+    with pytest.raises(ValueError, match="out of range"):
+        DofMap(3, shared=((np.array([0, 3]), 1),))
+
+
 @pytest.mark.parametrize("ties", [[[0, 0]], [[0, 1], [2, 1]], [[0, 9]], [[0, 1], [1, 0]]])
 def test_dofmap_rejects_bad_ties(ties):
     with pytest.raises(ValueError):
