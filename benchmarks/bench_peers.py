@@ -50,10 +50,11 @@ def our_iterations(mesh_path: Path, iterations: int, backends: tuple[str, ...]) 
     from icewall.fem.dofs import DofMap
     from icewall.fem.kinematics import element_kinematics, gauss_point_spacing
     from icewall.fem.quadrature import gauss_rule
-    from icewall.model.materials import build_groups
-    from icewall.model.structure import Structure
-    from icewall.solve.constraints import SupportConstraints
-    from icewall.solve.control import PathState, Problem, follow_path
+    from icewall.mesh.mesh import CONCRETE, Mesh, Region
+    from icewall.model.build import Model
+    from icewall.model.description import ModelDescription
+    from icewall.solve.control import PathState, follow_path
+    from icewall.solve.problem import build_problem
     from icewall.solve.settings import solver_settings
 
     with np.load(mesh_path) as z:
@@ -64,19 +65,25 @@ def our_iterations(mesh_path: Path, iterations: int, backends: tuple[str, ...]) 
         "loads.control.target=0.3"]).deck
     dofs = DofMap(len(nodes))
     kin = element_kinematics(nodes, cells, "quad8", gauss_rule(3), "plane_strain", 200.0, dofs)
-    spacing = gauss_point_spacing(nodes, cells, 3)
-    groups = build_groups(deck, np.full(len(cells), "concrete"), spacing, 9)
-    structure = Structure(kin, Assembler(kin.dofs, dofs.n_equations), groups)
     sets = peers.node_sets(nodes, length, height)
-    problem = Problem(structure, SupportConstraints(dofs.n_equations, peers.fixed_dofs(sets)),
-                      peers.reference_load(len(nodes), sets), None, 2 * sets["mid"] + 1)
-    initial = PathState(np.zeros(dofs.n_equations), 0.0, structure.initial_states())
+    mesh = Mesh(nodes, cells, "quad8", np.zeros(len(cells), int),
+                (Region("concrete", CONCRETE, 0),))  # one block: no interface pairs
+    model = Model(  # the harness's mesh, supports and load with the deck's concrete
+        deck=None, description=ModelDescription.of_deck(deck), mesh=mesh, dof_map=dofs,
+        kinematics=kin, assembler=Assembler(kin.dofs, dofs.n_equations),
+        cell_material=np.full(len(cells), "concrete"),
+        gauss_spacing=gauss_point_spacing(nodes, cells, 3), fixed=peers.fixed_dofs(sets),
+        reference_load=peers.reference_load(len(nodes), sets), preload=None,
+        control_equation=2 * sets["mid"] + 1, measure_name="P", measure_unit="N",
+        measure_factor=1.0)
+    problem = build_problem(model)
+    initial = PathState(np.zeros(dofs.n_equations), 0.0, problem.structure.initial_states())
     timer = PhaseTimer(sample_every=1, backends=backends, stop_after=iterations)
     tic = time.perf_counter()
     steps = 0
     with timer.installed():
         try:
-            for _ in follow_path(problem, solver_settings(deck), initial):
+            for _ in follow_path(problem, solver_settings(model.description), initial):
                 steps += 1
         except StopBenchmark:
             pass

@@ -23,11 +23,9 @@ from icewall.deck.load import load_deck
 from icewall.interface.augmented import active_rows
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
-from icewall.model.materials import build_groups
-from icewall.model.structure import Structure
-from icewall.solve.control import PathState, Problem
-from icewall.solve.nonlinear import _newton_constraints, make_constraints
+from icewall.solve.control import PathState
 from icewall.solve.path import follow_path
+from icewall.solve.problem import Problem, build_problem
 from icewall.solve.settings import SolverSettings, solver_settings
 
 NEWTON = ("analysis.scheme=newton", "outputs.fields=[]", "materials.concrete.mode_rule_band=0.1",
@@ -44,18 +42,13 @@ def newton_problem(deck_path: str, sets: list[str]
     deck = load_deck(deck_path, [*NEWTON, *sets]).deck
     mesh = build_mesh(deck)
     model = build_model(deck, mesh, region_materials(deck))
-    groups = build_groups(deck, model.cell_material, model.gauss_spacing,
-                          model.kinematics.dV.shape[1])
-    structure = Structure(model.kinematics, model.assembler, groups)
-    constraints = make_constraints(model, structure)
-    _newton_constraints(constraints)
-    problem = Problem(structure, constraints, model.reference_load, model.preload,
-                      model.control_equation)
-    start = PathState(np.zeros(model.dof_map.n_equations), 0.0, structure.initial_states())
+    problem = build_problem(model, "newton")
+    start = PathState(np.zeros(model.dof_map.n_equations), 0.0,
+                      problem.structure.initial_states())
     free = np.ones(model.dof_map.n_equations, dtype=bool)
-    free[constraints.fixed] = False
+    free[problem.constraints.fixed] = False
     free[model.control_equation] = False
-    return problem, start, np.flatnonzero(free), solver_settings(deck)
+    return problem, start, np.flatnonzero(free), solver_settings(model.description)
 
 
 def smallest_eigenvalues(problem: Problem, state: PathState, free: np.ndarray) -> np.ndarray:

@@ -7,9 +7,9 @@ Fig. A.4: all its nodes share one u_z equation (the control equation, "constrain
 straight line"); with ``platen="fixed"`` u_r = 0 there too ("fixed to reflect no slip"),
 ``"frictionless"`` leaves u_r free (the uniform-stress verification case).
 
-The model runs through the wall analyses' machinery unchanged: the concrete group of
-`icewall.model.materials.build_groups` (thesis law; deck fields as in `Concrete`), `Structure`
-and `icewall.solve.control.follow_path` (displacement control, eqs. 3.44-3.50). Its result is
+The model goes the walls' path: a `ModelDescription` (the deck's own `Concrete`, `Analysis`
+and `Control` sections) and a `Model`, whose problem `build_problem` makes as for every wall,
+solved by `icewall.solve.control.follow_path` (displacement control, eqs. 3.44-3.50). Its result is
 the average stress P / (pi R^2) against the average strain delta / (H / 2), compression > 0.
 """
 
@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from icewall.deck.analysis_options import Analysis
-from icewall.deck.schema import Concrete, Control, Interface
+from icewall.deck.schema import Concrete, Control
 from icewall.errors import ConvergenceError
 from icewall.fem.assembly import Assembler
 from icewall.fem.dofs import DofMap
@@ -31,10 +31,10 @@ from icewall.fem.kinematics import element_kinematics, gauss_point_spacing
 from icewall.fem.quadrature import gauss_rule
 from icewall.mesh.mesh import CONCRETE, Mesh
 from icewall.mesh.structured import rectangle_mesh
-from icewall.model.materials import build_groups
-from icewall.model.structure import Structure
-from icewall.solve.constraints import SupportConstraints
-from icewall.solve.control import PathState, Problem, follow_path
+from icewall.model.build import Model
+from icewall.model.description import ModelDescription
+from icewall.solve.control import PathState, follow_path
+from icewall.solve.problem import Problem, build_problem
 from icewall.solve.settings import solver_settings
 
 DIAMETER = 150.0  # mm, standard cylinder (specimens.md; the thesis gives no size)
@@ -62,79 +62,66 @@ class CylinderCase:
 
 
 @dataclass(frozen=True)
-class _Materials:
-    concrete: Concrete
-    interface: Interface = Interface()
-
-
-@dataclass(frozen=True)
-class _Loads:
-    control: Control
-
-
-@dataclass(frozen=True)
-class CylinderDeck:
-    """The parts of a wall deck that `build_groups` and `solver_settings` read."""
-
-    materials: _Materials
-    analysis: Analysis
-    loads: _Loads
-
-
-@dataclass(frozen=True)
 class CylinderModel:
-    """The assembled quarter cylinder and the problem `follow_path` solves."""
+    """The quarter cylinder as a model (the walls' `Model`, with the study's own description
+    and mesh) and the problem `follow_path` solves (`build_problem`, as for the walls)."""
 
     case: CylinderCase
-    deck: CylinderDeck
-    mesh: Mesh
-    numbering: DofMap  # one u_z equation shared by the loading head
-    structure: Structure
+    model: Model
     problem: Problem
-    gauss_spacing: np.ndarray  # (n_el,) h_c of eq. 4.3
+
+    @property
+    def mesh(self) -> Mesh:
+        return self.model.mesh
+
+    @property
+    def gauss_spacing(self) -> np.ndarray:
+        """(n_el,) h_c of eq. 4.3."""
+        return self.model.gauss_spacing
 
     @property
     def area(self) -> float:
         return math.pi * (0.5 * DIAMETER) ** 2
 
 
-def cylinder_deck(case: CylinderCase, increment: float = 0.01, target: float = 1.0,
-                  **analysis: Any) -> CylinderDeck:
+def cylinder_description(case: CylinderCase, increment: float = 0.01, target: float = 1.0,
+                         **analysis: Any) -> ModelDescription:
     """Concrete, analysis (axisymmetric quad8, 3x3; `analysis` overrides) and control."""
     concrete = dict(case.concrete)
     if case.input_area is not None:
         concrete["k_c"] = case.fc / case.input_area  # A_cd = sigma_c / k_c (3.27, errata)
-    return CylinderDeck(
-        materials=_Materials(Concrete(fc=case.fc, **concrete)),
-        analysis=Analysis(formulation="axisymmetric", element="quad8", gauss=GAUSS, **analysis),
-        loads=_Loads(Control(increment=increment, target=target)))
+    return ModelDescription(
+        {"concrete": Concrete(fc=case.fc, **concrete)},
+        Analysis(formulation="axisymmetric", element="quad8", gauss=GAUSS, **analysis),
+        Control(increment=increment, target=target))
 
 
 def build_cylinder(case: CylinderCase, **analysis: Any) -> CylinderModel:
-    """Mesh, equations, concrete group and the displacement-control problem of `case`."""
+    """Mesh, equations (the head's u_z one equation), supports and the control equation."""
     if case.platen not in ("fixed", "frictionless"):
         raise ValueError(f"platen must be 'fixed' or 'frictionless', got {case.platen!r}")
-    deck = cylinder_deck(case, **analysis)
+    description = cylinder_description(case, **analysis)
     mesh = rectangle_mesh(0.0, 0.5 * DIAMETER, 0.0, 0.5 * HEIGHT, case.nx, case.ny, "quad8",
                           region_name="concrete", kind=CONCRETE)
     head = mesh.node_sets["top"]
-    numbering = DofMap(mesh.n_nodes, shared=((head, 1),))
+    dof_map = DofMap(mesh.n_nodes, shared=((head, 1),))  # "moves as a straight line"
     kin = element_kinematics(mesh.points, mesh.cells, "quad8", gauss_rule(GAUSS),
-                             "axisymmetric", 1.0, numbering)
-    spacing = gauss_point_spacing(mesh.points, mesh.cells, GAUSS)
-    groups = build_groups(deck, np.full(mesh.n_cells, "concrete"), spacing, GAUSS * GAUSS)
-    structure = Structure(kin, Assembler(kin.dofs, numbering.n_equations), groups)
-    fixed = [numbering.equations(mesh.node_sets["left"], 0),  # axis: u_r = 0
-             numbering.equations(mesh.node_sets["bottom"], 1)]  # mid-height: u_z = 0
+                             "axisymmetric", 1.0, dof_map)
+    fixed = [dof_map.equations(mesh.node_sets["left"], 0),  # axis: u_r = 0
+             dof_map.equations(mesh.node_sets["bottom"], 1)]  # mid-height: u_z = 0
     if case.platen == "fixed":
-        fixed.append(numbering.equations(head, 0))  # no slip under the loading head
-    platen = int(numbering.equations(head[:1], 1)[0])
-    reference = np.zeros(numbering.n_equations)
+        fixed.append(dof_map.equations(head, 0))  # no slip under the loading head
+    platen = int(dof_map.equations(head[:1], 1)[0])
+    reference = np.zeros(dof_map.n_equations)
     reference[platen] = -1.0  # unit downward head force: the load factor is the force P (N)
-    problem = Problem(structure, SupportConstraints(numbering.n_equations,
-                                                    np.unique(np.concatenate(fixed))),
-                      reference, None, platen)
-    return CylinderModel(case, deck, mesh, numbering, structure, problem, spacing)
+    model = Model(
+        deck=None, description=description, mesh=mesh, dof_map=dof_map, kinematics=kin,
+        assembler=Assembler(kin.dofs, dof_map.n_equations),
+        cell_material=np.full(mesh.n_cells, "concrete"),
+        gauss_spacing=gauss_point_spacing(mesh.points, mesh.cells, GAUSS),
+        fixed=np.unique(np.concatenate(fixed)), reference_load=reference, preload=None,
+        control_equation=platen, measure_name="P", measure_unit="N", measure_factor=1.0)
+    return CylinderModel(case, model, build_problem(model))
 
 
 @dataclass(frozen=True)
@@ -195,14 +182,14 @@ def run_cylinder(case: CylinderCase, stages: tuple[tuple[float, float], ...] = (
     peak, at the end of the last stage, or when the solver stops (`stopped` says why)."""
     half = 0.5 * HEIGHT
     model = build_cylinder(case, **analysis)
-    state = PathState(np.zeros(model.numbering.n_equations), 0.0,
-                      model.structure.initial_states())
+    state = PathState(np.zeros(model.model.dof_map.n_equations), 0.0,
+                      model.problem.structure.initial_states())
     strain, stress, iterations, snaps, jumped = [0.0], [0.0], [0], 0, 0
     stopped, tic, done = "", time.perf_counter(), False
     legs = list(stages)
     while legs and not (stopped or done):
         target, step = legs.pop(0)
-        settings = replace(solver_settings(model.deck), increment=step * half,
+        settings = replace(solver_settings(model.model.description), increment=step * half,
                            target=target * half)
         try:
             for inc, reached in follow_path(model.problem, settings, state):
@@ -226,5 +213,5 @@ def run_cylinder(case: CylinderCase, stages: tuple[tuple[float, float], ...] = (
         np.array(strain), np.array(stress), np.array(iterations), snaps, jumped, stopped,
         time.perf_counter() - tic,
         gauss_stress=np.zeros((0, 0, 4)) if last is None else last.stress,
-        displacement=state.u[model.numbering.node_equations],
+        displacement=model.model.dof_map.expand(state.u),
         gauss_spacing=model.gauss_spacing)

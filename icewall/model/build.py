@@ -12,16 +12,19 @@ from icewall.fem.dofs import DofMap
 from icewall.fem.kinematics import ElementKinematics, element_kinematics, gauss_point_spacing
 from icewall.fem.quadrature import gauss_rule
 from icewall.materials.elastic import elastic_moduli
-from icewall.materials.parameters import derive_concrete_parameters
 from icewall.mesh.mesh import Mesh
+from icewall.model.description import MATERIAL_KEYS, ModelDescription
 from icewall.model.loads import load_measure, patch_load_vector, preload_vector
+from icewall.model.materials import initial_elastic
 
 
 @dataclass(frozen=True)
 class Model:
-    """Everything the solvers need, built once per run."""
+    """Everything the solvers need, built once per run: from a wall deck (`build_model`) or
+    from a study's own description and mesh (the cylinder of thesis Appendix A)."""
 
-    deck: Deck
+    deck: Deck | None  # the wall deck it was built from; None for a study's own model
+    description: ModelDescription  # what the laws, constraints and solver settings read
     mesh: Mesh
     dof_map: DofMap
     kinematics: ElementKinematics
@@ -43,23 +46,16 @@ def cell_materials(deck: Deck, mesh: Mesh, materials_of_region: dict[str, str]) 
     return names[mesh.cell_region]
 
 
-def initial_elastic_constants(deck: Deck, cell_material: np.ndarray,
+def initial_elastic_constants(description: ModelDescription, cell_material: np.ndarray,
                               gauss_spacing: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Initial E and nu per cell (concrete: E0 of thesis 4.3.1, or the deck's override)."""
-    mats = deck.materials
+    """Initial E and nu per cell (model.materials.initial_elastic of each material)."""
     E = np.empty(len(cell_material))
     nu = np.empty(len(cell_material))
-    for key, props in (("steel", mats.steel), ("bearing_plates", mats.bearing_plates),
-                       ("legs", mats.legs)):
+    for key in MATERIAL_KEYS:
         sel = cell_material == key
-        E[sel], nu[sel] = props.E, props.nu
-    sel = cell_material == "concrete"
-    if sel.any():
-        c = mats.concrete
-        overrides = {"E0": c.E} if c.E is not None else {}
-        E[sel] = derive_concrete_parameters(c.fc, float(np.mean(gauss_spacing[sel])),
-                                            **overrides).E0
-        nu[sel] = c.nu
+        if sel.any():
+            E[sel], nu[sel] = initial_elastic(key, description.materials[key],
+                                              float(np.mean(gauss_spacing[sel])))
     return E, nu
 
 
@@ -82,7 +78,8 @@ def build_model(deck: Deck, mesh: Mesh, materials_of_region: dict[str, str]) -> 
     preload = preload_vector(deck, mesh)
     name, unit, factor = load_measure(deck)
     return Model(
-        deck=deck, mesh=mesh, dof_map=dof_map, kinematics=kin,
+        deck=deck, description=ModelDescription.of_deck(deck), mesh=mesh, dof_map=dof_map,
+        kinematics=kin,
         assembler=Assembler(kin.dofs, dof_map.n_equations), cell_material=cell_material,
         gauss_spacing=spacing, fixed=np.unique(np.concatenate(fixed)),
         reference_load=dof_map.restrict(patch_load_vector(deck, mesh)),
@@ -93,7 +90,8 @@ def build_model(deck: Deck, mesh: Mesh, materials_of_region: dict[str, str]) -> 
 
 def elastic_moduli_per_point(model: Model) -> np.ndarray:
     """(n_el, nq, 4, 4) initial elastic moduli."""
-    E, nu = initial_elastic_constants(model.deck, model.cell_material, model.gauss_spacing)
-    D = elastic_moduli(E, nu, model.deck.analysis.formulation)  # (n_el, 4, 4)
+    E, nu = initial_elastic_constants(model.description, model.cell_material,
+                                      model.gauss_spacing)
+    D = elastic_moduli(E, nu, model.description.analysis.formulation)  # (n_el, 4, 4)
     nq = model.kinematics.dV.shape[1]
     return np.broadcast_to(D[:, None], (len(E), nq, 4, 4))

@@ -9,10 +9,12 @@ from typing import Any
 
 import numpy as np
 
-from icewall.deck.schema import Deck
+from icewall.deck.analysis_options import Analysis
+from icewall.deck.schema import Concrete, Steel
 from icewall.materials.elastic import ElasticLaw, elastic_moduli
 from icewall.materials.law import MaterialLaw
 from icewall.materials.parameters import ConcreteParameters, derive_concrete_parameters
+from icewall.model.description import MATERIAL_KEYS, ModelDescription
 
 
 @dataclass(frozen=True)
@@ -45,9 +47,8 @@ def concrete_point_parameters(params: ConcreteParameters, h_c: np.ndarray,
     return ConcretePointParameters(**values)
 
 
-def concrete_parameters(deck: Deck, h_c: float) -> ConcreteParameters:
-    """The deck's concrete with every thesis 4.3.1 default and the deck's overrides."""
-    c = deck.materials.concrete
+def concrete_parameters(c: Concrete, h_c: float) -> ConcreteParameters:
+    """A deck's concrete section with every thesis 4.3.1 default and the section's overrides."""
     overrides: dict[str, Any] = {"eps_c": c.eps_c, "nu0": c.nu, "Gf": c.Gf,
                                  "fcb_ratio": c.surface.biaxial_ratio,
                                  "compression_tension_rule": c.compression_tension_rule,
@@ -69,41 +70,44 @@ def _surface_points(f1_ratio: float, f2_ratio: float):
     return hydrostatic_points(f1=f1_ratio, f2=f2_ratio)
 
 
-def build_groups(deck: Deck, cell_material: np.ndarray, gauss_spacing: np.ndarray,
-                 n_gauss_points: int, linear: bool = False) -> tuple[MaterialGroup, ...]:
-    """One group per deck material present in the mesh; `linear` makes every law elastic."""
-    formulation = deck.analysis.formulation
+def build_groups(description: ModelDescription, cell_material: np.ndarray,
+                 gauss_spacing: np.ndarray, n_gauss_points: int, linear: bool = False
+                 ) -> tuple[MaterialGroup, ...]:
+    """One group per material present in the mesh; `linear` makes every law elastic."""
     groups = []
-    for name in ("concrete", "steel", "bearing_plates", "legs"):
+    for name in MATERIAL_KEYS:
         cells = np.flatnonzero(cell_material == name)
         if cells.size == 0:
             continue
-        if name == "concrete":
-            params = concrete_parameters(deck, float(np.mean(gauss_spacing[cells])))
-            if deck.materials.concrete.model == "rotating_crack" and not linear:
-                h_points = np.repeat(gauss_spacing[cells], n_gauss_points)
-                groups.append(MaterialGroup(name, cells, _concrete_law(deck, params, h_points)))
-                continue
-            E, nu = params.E0, deck.materials.concrete.nu
-        elif name == "steel":
-            steel = deck.materials.steel
-            if steel.model == "von_mises" and not linear:
-                groups.append(MaterialGroup(name, cells, _steel_law(deck)))
-                continue
-            E, nu = steel.E, steel.nu
+        section = description.materials[name]
+        h_c = float(np.mean(gauss_spacing[cells]))
+        if name == "concrete" and section.model == "rotating_crack" and not linear:
+            h_points = np.repeat(gauss_spacing[cells], n_gauss_points)
+            law = _concrete_law(section, description.analysis,
+                                concrete_parameters(section, h_c), h_points)
+        elif name == "steel" and section.model == "von_mises" and not linear:
+            law = _steel_law(section, description.analysis.formulation)
         else:
-            props = getattr(deck.materials, name)
-            E, nu = props.E, props.nu
-        groups.append(MaterialGroup(name, cells, ElasticLaw(elastic_moduli(E, nu, formulation))))
+            E, nu = initial_elastic(name, section, h_c)
+            law = ElasticLaw(elastic_moduli(E, nu, description.analysis.formulation))
+        groups.append(MaterialGroup(name, cells, law))
     return tuple(groups)
 
 
-def _concrete_law(deck: Deck, params: ConcreteParameters, h_points: np.ndarray) -> MaterialLaw:
-    """The deck's rotating-crack concrete at points of crack-band widths `h_points`."""
+def initial_elastic(name: str, section: Any, h_c: float) -> tuple[float, float]:
+    """Initial E and nu of a material section (concrete: E0 of thesis 4.3.1, or the
+    section's override, at the mean crack-band width `h_c` of its cells)."""
+    if name == "concrete":
+        return concrete_parameters(section, h_c).E0, section.nu
+    return section.E, section.nu
+
+
+def _concrete_law(c: Concrete, analysis: Analysis, params: ConcreteParameters,
+                  h_points: np.ndarray) -> MaterialLaw:
+    """A rotating-crack concrete section at points of crack-band widths `h_points`."""
     from icewall.materials.concrete_compiled import choose_kernel
     from icewall.materials.concrete_law import ConcreteLaw
 
-    c, analysis = deck.materials.concrete, deck.analysis
     fixed = {key: getattr(c, key) for key in ("k_t", "k_c") if getattr(c, key) is not None}
     floor = analysis.iteration_stiffness_floor
     tangent = analysis.concrete_stiffness == "tangent"
@@ -117,10 +121,9 @@ def _concrete_law(deck: Deck, params: ConcreteParameters, h_points: np.ndarray) 
                        c.trial_stress, floor, coaxial, own_moduli, kernel)
 
 
-def _steel_law(deck: Deck) -> MaterialLaw:
+def _steel_law(s: Steel, analysis_formulation: str) -> MaterialLaw:
     from icewall.materials.steel import SteelLaw, steel_parameters
 
-    s = deck.materials.steel
-    formulation = deck.analysis.formulation if s.formulation == "same" else s.formulation
+    formulation = analysis_formulation if s.formulation == "same" else s.formulation
     return SteelLaw(steel_parameters(s.E, s.nu, s.fy, hardening_ratio=s.hardening,
                                      formulation=formulation, fy_reduction=s.fy_reduction))

@@ -25,8 +25,8 @@ def concrete_parameter_rows(deck: Deck, mesh: Mesh) -> list[dict]:
         if region.kind != CONCRETE:
             continue
         h = spacing[mesh.cell_region == region.tag]
-        p = concrete_parameters(deck, float(np.mean(h)))
-        worst = concrete_parameters(deck, float(np.max(h)))
+        p = concrete_parameters(deck.materials.concrete, float(np.mean(h)))
+        worst = concrete_parameters(deck.materials.concrete, float(np.max(h)))
         row = {"region": region.name, **{key: float(getattr(p, key)) for key, *_ in COLUMNS},
                "h_c_min": float(h.min()), "h_c_max": float(h.max()), "warnings": []}
         if worst.snap_back_tension:

@@ -20,7 +20,8 @@ from typing import Any
 import numpy as np
 
 from icewall.errors import ConvergenceError
-from icewall.model.structure import Evaluation, Structure
+from icewall.model.structure import Evaluation
+from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
 
 # A converged increment whose load falls by more than this fraction of the largest load so
@@ -78,21 +79,6 @@ class StepFailed(Exception):
     def __init__(self, message: str, reason: str) -> None:
         super().__init__(message)
         self.reason = reason
-
-
-@dataclass(frozen=True)
-class Problem:
-    structure: Structure
-    constraints: Any  # SupportConstraints or GapConstraints
-    reference_load: np.ndarray  # R*, unit jack load on every patch (n_eq,)
-    preload: np.ndarray | None  # in-plane load vector (n_eq,), held during control
-    control_equation: int  # deflection = -u[control_equation]
-
-    def point_flags(self, states) -> tuple[np.ndarray | None, ...]:
-        """Per group, the (n, k) flags of each point whose switching within an increment
-        counts as chatter (the law's `flags`: crack, crush, yield), or None."""
-        return tuple(group.law.flags(state)
-                     for group, state in zip(self.structure.groups, states, strict=True))
 
 
 def _norm(x: np.ndarray) -> float:

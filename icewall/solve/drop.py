@@ -33,8 +33,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from icewall.errors import ConvergenceError
-from icewall.solve.control import Increment, PathState, Problem, StepFailed
+from icewall.solve.control import Increment, PathState, StepFailed
 from icewall.solve.newton import newton_increment, static_load_norm
+from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
 
 log = logging.getLogger(__name__)

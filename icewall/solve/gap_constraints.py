@@ -46,7 +46,7 @@ class GapConstraints(SupportConstraints):
 
     def __init__(self, model: Model) -> None:
         super().__init__(model.dof_map.n_equations, model.fixed)
-        mesh, interface = model.mesh, model.deck.materials.interface
+        mesh, interface = model.mesh, model.description.interface
         self.C = constraint_matrix(mesh.interface_pairs, mesh.interface_normals,
                                    model.dof_map.node_equations, self.n_equations)
         self.n_pairs = len(mesh.interface_pairs)

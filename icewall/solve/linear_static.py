@@ -41,7 +41,8 @@ def run_linear(model: Model, want_fields: bool = True,
     timings = {} if timings is None else timings
     start = time.perf_counter()
     moduli = elastic_moduli_per_point(model)
-    poisson = initial_elastic_constants(model.deck, model.cell_material, model.gauss_spacing)[1]
+    poisson = initial_elastic_constants(model.description, model.cell_material,
+                                        model.gauss_spacing)[1]
     K = model.assembler.matrix(stiffness_blocks(model.kinematics, moduli))
     timings["assembly"] = time.perf_counter() - start
     rhs = np.column_stack([model.reference_load] +
@@ -55,7 +56,7 @@ def run_linear(model: Model, want_fields: bool = True,
     if not abs(deflection_ref) > 0:
         raise ConvergenceError("the patch loads do not move the control point",
                                reason="singular system")
-    control = model.deck.loads.control
+    control = model.description.control
     n_steps = int(round(control.target / control.increment))
     targets = control.increment * np.arange(1, n_steps + 1)
     targets[-1] = control.target
@@ -66,7 +67,7 @@ def run_linear(model: Model, want_fields: bool = True,
         if want_fields:
             eps = strain(model.kinematics, u_eq)
             sig = np.einsum("eqij,eqj->eqi", moduli, eps)
-            if model.deck.analysis.formulation == "plane_stress":
+            if model.description.analysis.formulation == "plane_stress":
                 nu = np.broadcast_to(poisson[:, None], eps.shape[:2])
                 eps[..., 2] = plane_stress_strain_zz(eps, nu)
             timings["fields"] += time.perf_counter() - tic

@@ -20,8 +20,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from icewall.solve.control import Increment, PathState, Problem, StepFailed, _external_force_norm
+from icewall.solve.control import Increment, PathState, StepFailed, _external_force_norm
 from icewall.solve.controls import LoadControl
+from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
 
 if TYPE_CHECKING:

@@ -4,7 +4,6 @@ each converged increment reports (counts, energies, forensics)."""
 from __future__ import annotations
 
 import functools
-import os
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, fields, replace
 from typing import Any
@@ -13,13 +12,12 @@ import numpy as np
 
 from icewall.errors import ResultError
 from icewall.model.build import Model
-from icewall.model.materials import MaterialGroup, build_groups
+from icewall.model.materials import MaterialGroup
 from icewall.model.structure import Evaluation, Structure
-from icewall.solve import sparse
-from icewall.solve.constraints import SupportConstraints
-from icewall.solve.control import Increment, PathState, Problem, follow_path
+from icewall.solve.control import Increment, PathState, follow_path
 from icewall.solve.energy import EnergyAccount, secant_elastic_energy
 from icewall.solve.path import follow_path as follow_newton_path
+from icewall.solve.problem import build_problem
 from icewall.solve.settings import solver_settings
 
 
@@ -71,30 +69,14 @@ def _elastic_energy(structure: Structure, ev: Evaluation) -> dict[str, float]:
     return energy
 
 
-def make_constraints(model: Model, structure: Structure):
-    """Supports only when the interfaces are bonded or tied; gap elements otherwise."""
-    mesh = model.mesh
-    if model.deck.materials.interface.model == "gap" and len(mesh.interface_pairs):
-        from icewall.solve.gap_constraints import GapConstraints
-
-        return GapConstraints(model)
-    return SupportConstraints(model.dof_map.n_equations, model.fixed)
-
-
 def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
                   ) -> Iterator[StepReport]:
     """Yield every converged increment of the deck's analysis; with `resume` (a checkpoint of
     an interrupted run of the same model) from the step it was taken at."""
-    deck = model.deck
-    groups = build_groups(deck, model.cell_material, model.gauss_spacing,
-                          model.kinematics.dV.shape[1])
-    structure = Structure(model.kinematics, model.assembler, groups)
-    constraints = make_constraints(model, structure)
-    settings = solver_settings(deck)
-    if settings.scheme == "newton":
-        _newton_constraints(constraints)
-    problem = Problem(structure, constraints, model.reference_load, model.preload,
-                      model.control_equation)
+    settings = solver_settings(model.description)
+    problem = build_problem(model, settings.scheme)
+    structure, constraints = problem.structure, problem.constraints
+    groups = structure.groups
     energy = EnergyAccount()
     if resume is None:
         start = PathState(np.zeros(model.dof_map.n_equations), 0.0, structure.initial_states())
@@ -122,22 +104,6 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
         yield StepReport(inc, counts, energy.record(), structure, constraints, model.dof_map,
                          snapshot)
         stress, strain, previous_u, previous_load = ev.stress, ev.strain, inc.u, load
-
-
-def _newton_constraints(constraints: SupportConstraints) -> None:
-    """The constraint set as the Newton scheme uses it."""
-    if not os.environ.get(sparse.ENVIRONMENT_VARIABLE):
-        # the fastest factorisation for the size (docs/solver_backends.md); the secant
-        # scheme keeps the old call, which reproduces its earlier results bit for bit
-        constraints.sparse_backend = "auto"
-    if hasattr(constraints, "stabilization"):
-        # Newton solves the contact conditions with the displacements: no pair is frozen,
-        # and no spring stands in the matrix that is not in the residual (it would make the
-        # tangent inexact: CF-4's elastic step then converged linearly, 1 % per iteration);
-        # a pair that keeps switching between held and open is decided semismoothly instead
-        constraints.stabilization = 0.0
-        constraints.settle_cycles = True
-        constraints.max_changes = np.iinfo(np.int64).max
 
 
 def take_checkpoint(path: PathState, constraints, energy: EnergyAccount

@@ -30,7 +30,6 @@ from icewall.errors import ConvergenceError
 from icewall.solve.control import (
     Increment,
     PathState,
-    Problem,
     StepFailed,
     _external_force_norm,
 )
@@ -44,6 +43,7 @@ from icewall.solve.controls import (
 )
 from icewall.solve.drop import FIRST_INVERSE_STEP, drop_step
 from icewall.solve.newton import newton_increment
+from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
 from icewall.solve.steps import StepSizeController
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from icewall.deck.analysis_options import CONVERGED_TOLERANCE
 from icewall.deck.schema import Deck
+from icewall.model.description import ModelDescription
 
 
 @dataclass(frozen=True)
@@ -33,14 +34,15 @@ class SolverSettings:
     drop_held: str = "deflection"  # Newton: a drop holds the deflection | the stroke
 
 
-def solver_settings(deck: Deck) -> SolverSettings:
-    a, c = deck.analysis, deck.loads.control
+def solver_settings(description: ModelDescription) -> SolverSettings:
+    """The settings of the description's analysis and control sections."""
+    a, c = description.analysis, description.control
     return SolverSettings(
         tolerance_displacement=a.tolerance_displacement, tolerance_load=a.tolerance_load,
         max_iterations=a.max_iterations, max_step_cuts=a.max_step_cuts,
         stiffness_update=a.stiffness_update, increment=c.increment, target=c.target,
         preload_increments=a.preload_increments,
-        reset_slip_each_step=deck.materials.interface.reset_slip_each_step,
+        reset_slip_each_step=description.interface.reset_slip_each_step,
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
         on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps,
         scheme=a.scheme, trace_snap_backs=a.trace_snap_backs, drop_held=c.drop_held)

@@ -312,7 +312,7 @@ def _concrete_kernel(monkeypatch, kernel: str | None, *overrides: str) -> str:
         monkeypatch.setenv(compiled.KERNEL_VARIABLE, kernel)
     deck = load_deck(DECKS / "cf4.yaml", ["analysis.element_size=150", *overrides]).deck
     model = build_model(deck, build_mesh(deck), region_materials(deck))
-    groups = build_groups(deck, model.cell_material, model.gauss_spacing,
+    groups = build_groups(model.description, model.cell_material, model.gauss_spacing,
                           model.kinematics.dV.shape[1])
     return next(g for g in groups if isinstance(g.law, ConcreteLaw)).law.kernel
 

@@ -118,4 +118,4 @@ def test_the_deck_option_reaches_the_law():
     for overrides, expected in (([], "ray"),
                                 (["materials.concrete.post_peak_strength=peak"], "peak")):
         loaded = load_deck(deck, overrides).deck
-        assert concrete_parameters(loaded, 50.0).post_peak_strength == expected
+        assert concrete_parameters(loaded.materials.concrete, 50.0).post_peak_strength == expected

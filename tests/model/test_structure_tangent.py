@@ -16,6 +16,7 @@ from icewall.fem.kinematics import element_kinematics, gauss_point_spacing
 from icewall.fem.quadrature import gauss_rule
 from icewall.materials import concrete_compiled
 from icewall.mesh.structured import rectangle_mesh
+from icewall.model.description import ModelDescription
 from icewall.model.materials import build_groups
 from icewall.model.structure import Structure
 
@@ -32,7 +33,8 @@ def _block(formulation: str) -> tuple[Structure, DofMap, np.ndarray]:
     kin = element_kinematics(mesh.points, mesh.cells, "quad8", gauss_rule(3), formulation,
                              381.0, dofs)
     material = np.where(np.arange(6) % 2 == 0, "steel", "concrete")  # cells are x-major
-    groups = build_groups(deck, material, gauss_point_spacing(mesh.points, mesh.cells, 3), 9)
+    groups = build_groups(ModelDescription.of_deck(deck), material,
+                          gauss_point_spacing(mesh.points, mesh.cells, 3), 9)
     return Structure(kin, Assembler(kin.dofs, dofs.n_equations), groups), dofs, mesh.points
 
 

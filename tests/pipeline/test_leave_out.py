@@ -16,11 +16,11 @@ from icewall.deck.load import load_deck
 from icewall.materials.concrete_law import ConcreteLaw
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
-from icewall.model.structure import Structure
 from icewall.pipeline import run_deck
 from icewall.solve.constraints import SupportConstraints
 from icewall.solve.gap_constraints import GapConstraints
-from icewall.solve.nonlinear import make_constraints, run_nonlinear
+from icewall.solve.nonlinear import run_nonlinear
+from icewall.solve.problem import make_constraints
 
 DECKS = Path(__file__).resolve().parents[2] / "decks"
 COARSE = ["analysis.element_size=150", "loads.control.target=2"]
@@ -33,7 +33,7 @@ def _model(deck: str, *overrides: str):
 
 
 def _constraints(model):
-    return make_constraints(model, Structure(model.kinematics, model.assembler, ()))
+    return make_constraints(model)
 
 
 def test_bonded_deck_has_no_gap_elements_and_no_multiplier_rows():

@@ -65,7 +65,7 @@ def _all_free_constraints(stabilization: str):
     deck = loaded.deck
     mesh = build_mesh(deck)
     model = build_model(deck, mesh, region_materials(deck))
-    groups = build_groups(deck, model.cell_material, model.gauss_spacing,
+    groups = build_groups(model.description, model.cell_material, model.gauss_spacing,
                           model.kinematics.dV.shape[1])
     structure = Structure(model.kinematics, model.assembler, groups)
     constraints = GapConstraints(model)
