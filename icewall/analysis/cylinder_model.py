@@ -132,7 +132,7 @@ class CylinderCurve:
     stress: np.ndarray  # (m,) head force / (pi R^2), MPa
     iterations: np.ndarray  # (m,) per increment
     snap_throughs: int  # load drops accepted at the smallest step (analysis.on_snap_back)
-    jumps: int  # non-converged increments stepped over (run_cylinder's jumps)
+    jumps: int  # non-converged increments stepped over (analysis.max_jumps)
     stopped: str  # "" or why the solver stopped early
     run_time: float  # s
     gauss_stress: np.ndarray  # (n_el, nq, 4) at the last step
@@ -171,24 +171,19 @@ class CylinderCurve:
 
 
 def run_cylinder(case: CylinderCase, stages: tuple[tuple[float, float], ...] = ((0.003, 1e-4),),
-                 end_stress_ratio: float = 0.0, jumps: int = 0, jump_factor: float = 10.0,
-                 **analysis: Any) -> CylinderCurve:
-    """Drive the head through `stages` of (average strain reached, strain increment).
-
-    An increment that does not converge even after the step cuts is retried, up to `jumps`
-    times, as one `jump_factor` times larger step from the last converged state (a step over
-    a local snap-through that displacement control cannot follow); then the stage goes on.
-    Stops after the peak once the average stress falls below `end_stress_ratio` times the
-    peak, at the end of the last stage, or when the solver stops (`stopped` says why)."""
+                 end_stress_ratio: float = 0.0, **analysis: Any) -> CylinderCurve:
+    """Drive the head through `stages` of (average strain reached, strain increment), each a
+    displacement-control stage of the solver (steps over a stall: `analysis` max_jumps and
+    jump_increments, as for the walls). Stops after the peak once the average stress falls
+    below `end_stress_ratio` times the peak, at the end of the last stage, or when the solver
+    stops (`stopped` says why)."""
     half = 0.5 * HEIGHT
     model = build_cylinder(case, **analysis)
     state = PathState(np.zeros(model.model.dof_map.n_equations), 0.0,
                       model.problem.structure.initial_states())
     strain, stress, iterations, snaps, jumped = [0.0], [0.0], [0], 0, 0
     stopped, tic, done = "", time.perf_counter(), False
-    legs = list(stages)
-    while legs and not (stopped or done):
-        target, step = legs.pop(0)
+    for target, step in stages:
         settings = replace(solver_settings(model.model.description), increment=step * half,
                            target=target * half)
         try:
@@ -198,16 +193,14 @@ def run_cylinder(case: CylinderCase, stages: tuple[tuple[float, float], ...] = (
                 stress.append(inc.load_factor / model.area)
                 iterations.append(inc.iterations)
                 snaps += int(inc.snap_back)
+                jumped += int(inc.jumped)
                 done = stress[-1] < end_stress_ratio * max(stress)
                 if done:
                     break
         except ConvergenceError as exc:
-            if jumped < jumps and exc.reason == "non-convergence":
-                jumped += 1
-                jump = jump_factor * step
-                legs[:0] = [(strain[-1] + jump, jump), (target, step)]
-            else:
-                stopped = f"{exc.reason}: {exc}"
+            stopped = f"{exc.reason}: {exc}"
+        if stopped or done:
+            break
     last = state.evaluation
     return CylinderCurve(
         np.array(strain), np.array(stress), np.array(iterations), snaps, jumped, stopped,

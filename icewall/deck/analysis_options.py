@@ -87,11 +87,13 @@ class Analysis:
                                     "(docs/solver.md, item 17)")
     max_jumps: int = option(3, doc="times per run that a control step which does not converge "
                             "even at the smallest size and with every fallback iteration "
-                            "scheme is retried once as one step of twice the increment from "
-                            "the last converged state (stepping over a local instability, as "
+                            "scheme is retried once as one step of jump_increments increments "
+                            "from the last converged state (stepping over a local instability, as "
                             "a stroke-controlled test does); flagged in the history column "
                             "jumped and listed by icewall summary; 0 stops there instead",
                             minimum=0, maximum=100)
+    jump_increments: float = option(2.0, doc="size of a step over a stall (max_jumps), in "
+                                    "control increments", minimum=1.0, maximum=100.0)
     max_relaxation: float = option(1.0, doc="largest factor on a correction in the halving "
                                    "scheme: above 1 it over-relaxes the slow drift of the "
                                    "secant iteration after the peak (1.5: CF-4 needs 40 % "

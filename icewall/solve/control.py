@@ -70,7 +70,7 @@ class Increment:
     cuts: int = 0
     wall_time: float = 0.0
     snap_back: bool = False  # the load dropped in a jump displacement control cannot follow
-    jumped: bool = False  # a step of JUMP_FACTOR increments over a stall (settings.max_jumps)
+    jumped: bool = False  # a step over a stall (settings.max_jumps, jump_increments)
 
 
 class StepFailed(Exception):
@@ -268,7 +268,7 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
                 # step over the stall from the last converged state, as a stroke-controlled
                 # test goes on past a local instability (recorded in the history)
                 jumps, jumping, retry = jumps + 1, True, 0
-                size = JUMP_FACTOR * step_size
+                size = settings.jump_increments * step_size
                 log.info("control %.4g: stepping over the stall to %.4g (jump %d)", goal,
                          current + size, jumps)
                 continue
@@ -312,9 +312,6 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
                           inc.preload_factor, scale, (kind, current, size, peak_load, jumps))
         yield inc, state
 
-
-JUMP_FACTOR = 2.0
-"""A jump over a stall is one step of this many control increments (settings.max_jumps)."""
 
 FALLBACKS = 4
 """Iteration schemes tried at most, in turn, on a smallest step that did not converge."""

@@ -24,7 +24,8 @@ class SolverSettings:
     max_flag_changes: int = 4  # flag changes of a Gauss point in an increment before freezing
     on_snap_back: str = "continue"  # stop | continue (accept the drop, recorded per step)
     max_relaxation: float = 1.0  # largest relaxation factor of the halving scheme
-    max_jumps: int = 0  # failed smallest control steps retried as one step of 2 increments
+    max_jumps: int = 0  # failed smallest control steps retried as one step of ...
+    jump_increments: float = 2.0  # ... this many increments
     # concrete E_i of the iteration matrix: committed (the trial state's secants) | returned
     # (never stiffer than the stress the update returned: a fallback, control._schemes)
     iteration_secant: str = "committed"
@@ -45,6 +46,7 @@ def solver_settings(description: ModelDescription) -> SolverSettings:
         reset_slip_each_step=description.interface.reset_slip_each_step,
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
         on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps,
+        jump_increments=a.jump_increments,
         scheme=a.scheme, trace_snap_backs=a.trace_snap_backs, drop_held=c.drop_held)
 
 
