@@ -37,9 +37,9 @@ import scipy.sparse.linalg as spla
 from common import OUT, SUPERLU_OPTIONS, environment, median, print_table, write_csv
 
 import icewall.interface.augmented as augmented
+from icewall import sparse
 from icewall.deck.load import load_deck
 from icewall.pipeline import run_deck
-from icewall.solve import sparse
 
 MATRICES = OUT / "matrices"
 ORDERINGS = ("MMD_AT_PLUS_A", "COLAMD", "MMD_ATA", "NATURAL")

@@ -21,7 +21,7 @@ from icewall.pipeline import run_deck
 from icewall.results import open_result
 
 try:
-    from icewall.solve import sparse
+    from icewall import sparse
 except ImportError:  # a checkout before the sparse backends (a "before" measurement)
     sparse = None
 

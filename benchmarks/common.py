@@ -23,7 +23,7 @@ import icewall.solve.gap_constraints as gap_constraints
 from icewall.model.structure import Structure
 
 try:
-    from icewall.solve import sparse
+    from icewall import sparse
 except ImportError:  # a checkout before the sparse backends (a "before" measurement)
     sparse = None
 

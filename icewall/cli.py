@@ -263,8 +263,8 @@ def compare(results_dir: str, baseline_path: str, update: bool, peak_tol: float 
 @_handle_errors
 def summary(result: str, as_json: bool) -> None:
     """Key figures of a RESULT file: peak load and its deflection, final load, steps, time."""
+    from icewall.analysis.summary import format_summary, summarize
     from icewall.results.reader import damaged_result
-    from icewall.results.summary import format_summary, summarize
 
     with damaged_result(result):
         data = summarize(result)

@@ -7,7 +7,7 @@ import os
 
 from icewall.errors import IcewallError
 
-# name -> (accepted values, what it chooses); kept in step with icewall.solve.sparse and
+# name -> (accepted values, what it chooses); kept in step with icewall.sparse and
 # icewall.materials.concrete_compiled, which read them (tests/reliability checks both ways)
 VARIABLES = {
     "ICEWALL_SPARSE_SOLVER": (("auto", "superlu", "umfpack", "pardiso"), "sparse solver"),

@@ -240,8 +240,8 @@ def _write_linear(model, writer: ResultWriter, fields: set[str], say, timings) -
 
 def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings,
                      restart: ResumePoint | None = None) -> tuple[int, str, str]:
-    from icewall.analysis.mechanism import MechanismProbe, crushed_points, yielded_points
     from icewall.errors import ConvergenceError
+    from icewall.results.probe import MechanismProbe, crushed_points, yielded_points
     from icewall.solve.nonlinear import run_nonlinear
 
     restart = restart if restart is not None and restart.checkpoint is not None else None

@@ -56,6 +56,17 @@ TENSION_PLATE = "bottom_plate"
 _EPS = 1e-9
 
 
+def control_curve(history: dict) -> tuple[np.ndarray, np.ndarray, float]:
+    """(deflection, load, origin) of the displacement-control steps (after any preload)."""
+    d = np.asarray(history["control_displacement"], float)
+    p = np.asarray(history["load"], float)
+    control = np.ones(d.size, bool)
+    if "preload_stage" in history:
+        control = np.asarray(history["preload_stage"]) != 1
+    origin = float(d[~control][-1]) if (~control).any() else 0.0
+    return d[control], p[control], origin
+
+
 def stroke_curve(d: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The curve a stroke-controlled test records of a traced path: the points where the
     control deflection reaches a new maximum. Where the traced path snaps back (the deflection

@@ -7,7 +7,7 @@ end of the run: the peak is then a lower bound). A run that never peaked (still 
 end, or a linear-elastic run) gets no ratio and stays out of the mean and CoV: its largest load
 is no prediction of the ultimate load, nor its load at 40 mm of the residual. Reference values
 come from icewall.analysis.reference where it knows the specimen, else from the deck's
-`specimen.reference`. Ductility per CSA S474 clause 8.4.4 (icewall.post.ductility): the
+`specimen.reference`. Ductility per CSA S474 clause 8.4.4 (icewall.analysis.ductility): the
 ratio mu reached, pass / fail / undecided, and the energy absorbed (area under the total jack
 load - control deflection curve, N mm). Mechanism checks (issue 20 §1,
 icewall.analysis.mechanism): the bottom (tension) plate's mean stress at the peak over f_y, at
@@ -47,8 +47,8 @@ _SCALE = {"N": 1.0, "kN": 1e3, "MN": 1e6, "MPa": 1.0, "N/mm2": 1.0}
 def _measures(path: str) -> dict:
     """Peak load, its deflection and the residual load at 40 mm of one result file, as the
     shared extractor (icewall.analysis.extract) defines them."""
+    from icewall.analysis.ductility import result_ductility
     from icewall.analysis.extract import extract
-    from icewall.post.ductility import result_ductility
     from icewall.results.reader import open_result
 
     with open_result(path) as res:

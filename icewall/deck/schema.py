@@ -190,6 +190,10 @@ class Elastic:
     nu: float = option(0.3, doc="Poisson's ratio", minimum=0.0, maximum=0.49)
 
 
+FIXED_POINT_PLACEMENTS = ("top", "corners", "bottom_support")
+"""Where `Interface.fixed_point_placement` may put fixed pairs (icewall.interface.gap)."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class Interface:
     model: str = option("gap", doc="gap: double nodes with gap elements (thesis 3.3); "

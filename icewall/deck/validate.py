@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from icewall.deck.resources import refusals
-from icewall.deck.schema import Deck
+from icewall.deck.schema import FIXED_POINT_PLACEMENTS, Deck
 
 ErrorFactory = Callable[[str, str], Exception]
 
@@ -151,8 +151,6 @@ def _check_preload(deck: Deck, fail: ErrorFactory) -> None:
 
 
 def _check_fixed_points(deck: Deck, fail: ErrorFactory) -> None:
-    from icewall.interface.gap import FIXED_POINT_PLACEMENTS
-
     key = "materials.interface.fixed_point_placement"
     for i, where in enumerate(deck.materials.interface.fixed_point_placement):
         if where not in FIXED_POINT_PLACEMENTS:

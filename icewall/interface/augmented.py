@@ -22,8 +22,8 @@ import scipy.sparse as sp
 from icewall.errors import ConvergenceError
 from icewall.interface.gap import FIXED, FREE, SLIP, GapState, relative_displacement, slip_force
 from icewall.interface.pattern import AugmentedPattern, canonical_csr, fixed_mask
-from icewall.solve.sparse import RESIDUAL_RTOL, SingularMatrixError, SparseLU
-from icewall.solve.sparse import factorize as sparse_factorize
+from icewall.sparse import RESIDUAL_RTOL, SingularMatrixError, SparseLU
+from icewall.sparse import factorize as sparse_factorize
 
 # |U_jj| below this fraction of the largest entry of column j marks a singular system
 # (a floating core gives ~1e-16).
@@ -172,7 +172,7 @@ def column_max_abs(A: sp.csc_matrix) -> np.ndarray:
 
 def factorize(A: sp.spmatrix, backend: str | None = None, check_pivots: bool = True
               ) -> AugmentedFactor:
-    """LU of the augmented matrix (icewall.solve.sparse; SuperLU unless chosen otherwise);
+    """LU of the augmented matrix (icewall.sparse; SuperLU unless chosen otherwise);
     ConvergenceError(reason="singular system") when singular. `check_pivots`: compare SuperLU's
     pivots with the column scales (extracting U costs about a tenth of the factorisation)."""
     A = sp.csc_matrix(A)

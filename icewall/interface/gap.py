@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.sparse as sp
 
+from icewall.deck.schema import FIXED_POINT_PLACEMENTS
 from icewall.mesh.mesh import CONCRETE, Mesh
 
 FIXED, SLIP, FREE = 0, 1, 2
@@ -256,9 +257,6 @@ def friction_work_increment(state_old: GapState, state_new: GapState) -> float:
     slipping = state_new.state == SLIP
     mean_force = 0.5 * (np.abs(state_old.lam_T) + np.abs(state_new.lam_T))
     return float(np.sum((mean_force * np.abs(state_new.gap_T - state_old.gap_T))[slipping]))
-
-
-FIXED_POINT_PLACEMENTS = ("top", "corners", "bottom_support")
 
 
 def fixed_point_mask(mesh: Mesh, interface) -> np.ndarray | None:

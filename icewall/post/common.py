@@ -5,22 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from icewall.analysis.extract import control_curve
 from icewall.errors import ResultError
-from icewall.fem.quadrature import gauss_rule
-from icewall.fem.shape import shape_derivatives, shape_functions
 from icewall.mesh.mesh import Mesh
 
 # boundary order of the nodes of a cell (quad8: corner, mid-side, corner, ...)
 _OUTLINE = {"quad4": [0, 1, 2, 3], "quad8": [0, 4, 1, 5, 2, 6, 3, 7]}
 STATE_FIELDS_HINT = ("run the deck with the state fields stored, e.g. "
                      "--set 'outputs.fields=[displacement, stress, strain, state]'")
-
-
-def gauss_points_xy(mesh: Mesh, gauss_order: int) -> np.ndarray:
-    """Coordinates (n_el, nq, 2) of the Gauss points of every cell (point order of
-    icewall.fem.quadrature.gauss_rule, as the solver stores Gauss fields)."""
-    N = shape_functions(mesh.cell_type, gauss_rule(gauss_order).points)  # (nq, nn)
-    return np.einsum("qn,enx->eqx", N, mesh.points[mesh.cells])
 
 
 def gauss_spacing(mesh, n_gauss: int) -> np.ndarray:
@@ -33,14 +25,6 @@ def gauss_spacing(mesh, n_gauss: int) -> np.ndarray:
 def gauss_order(result, field: np.ndarray) -> int:
     """Gauss rule order of the run (attribute, else from the number of points)."""
     return int(result.attrs.get("gauss_order") or round(np.sqrt(field.shape[1])))
-
-
-def gauss_volumes(mesh: Mesh, gauss_order: int) -> np.ndarray:
-    """Area weights (n_el, nq) of the Gauss points: quadrature weight x |det J| (mm^2)."""
-    rule = gauss_rule(gauss_order)
-    dN = shape_derivatives(mesh.cell_type, rule.points)  # (nq, nn, 2)
-    J = np.einsum("qna,enx->eqax", dN, mesh.points[mesh.cells])
-    return rule.weights * np.abs(np.linalg.det(J))
 
 
 def cell_outlines(points: np.ndarray, mesh: Mesh) -> np.ndarray:
@@ -58,17 +42,6 @@ def cells_of_region(mesh: Mesh, prefix: str) -> dict[str, np.ndarray]:
     """Region name -> cell mask, for the regions whose name starts with `prefix`."""
     return {r.name: mesh.cell_region == r.tag for r in mesh.regions
             if r.name.startswith(prefix)}
-
-
-def control_curve(history: dict) -> tuple[np.ndarray, np.ndarray, float]:
-    """(deflection, load, origin) of the displacement-control steps (after any preload)."""
-    d = np.asarray(history["control_displacement"], float)
-    p = np.asarray(history["load"], float)
-    control = np.ones(d.size, bool)
-    if "preload_stage" in history:
-        control = np.asarray(history["preload_stage"]) != 1
-    origin = float(d[~control][-1]) if (~control).any() else 0.0
-    return d[control], p[control], origin
 
 
 def step_at(result, at: float | str) -> int:

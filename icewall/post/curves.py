@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
+from icewall.analysis.extract import control_curve
 from icewall.errors import ResultError
-from icewall.post.common import control_curve, load_axis
+from icewall.post.common import load_axis
 from icewall.results.reader import open_result
 
 RESIDUAL_AT = 40.0  # mm, where the residual is compared (icewall.analysis.sweep_table)

@@ -11,9 +11,9 @@ from datetime import datetime
 from pathlib import Path
 
 from icewall import __version__
+from icewall.analysis.summary import LINEAR_NOTE, solver_label
 from icewall.errors import ResultError
 from icewall.results.reader import open_result
-from icewall.results.summary import LINEAR_NOTE, solver_label
 
 RESIDUAL_AT = 40.0  # mm
 PATTERNS_AT = ("peak", RESIDUAL_AT)
@@ -36,9 +36,9 @@ def run_name(path: str | Path) -> str:
 def validation_row(path: str | Path) -> dict:
     """One table row: peak and load at 40 mm (icewall.analysis.extract), the test values, the
     test/predicted ratios, and the clause 8.4.4 ductility check."""
+    from icewall.analysis.ductility import result_ductility
     from icewall.analysis.extract import extract
     from icewall.post.curves import reference_loads
-    from icewall.post.ductility import result_ductility
 
     with open_result(path) as r:
         attrs, deck_text = dict(r.attrs), r.deck_text

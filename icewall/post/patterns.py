@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from icewall.post.common import gauss_order, gauss_points_xy, gauss_spacing, require_fields
+from icewall.mesh.gauss import gauss_points_xy
+from icewall.post.common import gauss_order, gauss_spacing, require_fields
 
 MARK_FRACTION = 0.8  # crack line length / Gauss-point spacing of its cell
 

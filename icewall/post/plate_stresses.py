@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from icewall.post.common import cells_of_region, gauss_order, gauss_points_xy, gauss_volumes
+from icewall.mesh.gauss import gauss_points_xy, gauss_volumes
+from icewall.post.common import cells_of_region, gauss_order
 
 PLATES = ("top_plate", "bottom_plate")
 COMPONENT = {0: 0, 1: 1}  # axis along the member -> stress component (xx, yy)

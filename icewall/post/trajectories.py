@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from icewall.post.common import cells_of_kind, gauss_order, gauss_points_xy, gauss_spacing
+from icewall.mesh.gauss import gauss_points_xy
+from icewall.post.common import cells_of_kind, gauss_order, gauss_spacing
 
 
 def principal_stresses(stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -7,8 +7,7 @@ A run writes ``<path>.partial`` and renames it to ``<path>`` when it completes o
 """
 
 from icewall.results.reader import ResultFile, open_result
-from icewall.results.summary import format_summary, summarize
 from icewall.results.writer import FORMAT, FORMAT_VERSION, ResultWriter, StepRecord
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "ResultFile", "ResultWriter", "StepRecord",
-           "format_summary", "open_result", "summarize"]
+           "open_result"]

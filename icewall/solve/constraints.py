@@ -11,11 +11,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from icewall.errors import ConvergenceError
-from icewall.solve.sparse import SingularMatrixError, factorize
+from icewall.sparse import SingularMatrixError, factorize
 
 
 class Factorization:
-    """Sparse LU of one iteration matrix (icewall.solve.sparse); `solve` takes (n,) or (n, k)
+    """Sparse LU of one iteration matrix (icewall.sparse); `solve` takes (n,) or (n, k)
     right-hand sides."""
 
     def __init__(self, A: sp.spmatrix, hint: str = "", backend: str | None = None) -> None:
@@ -60,7 +60,7 @@ class SupportConstraints:
     """Homogeneous supports only: u[fixed] = 0. No multipliers."""
 
     n_multipliers = 0
-    sparse_backend: str | None = None  # icewall.solve.sparse: None = $ICEWALL_SPARSE_SOLVER
+    sparse_backend: str | None = None  # icewall.sparse: None = $ICEWALL_SPARSE_SOLVER
 
     def __init__(self, n_equations: int, fixed: np.ndarray) -> None:
         self.n_equations = n_equations

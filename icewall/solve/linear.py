@@ -6,7 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from icewall.errors import ConvergenceError
-from icewall.solve.sparse import SingularMatrixError, factorize
+from icewall.sparse import SingularMatrixError, factorize
 
 # A pivot smaller than this fraction of its column's diagonal entry marks a (numerically)
 # singular matrix. Unrestrained rigid modes gave 1e-16..3e-13 on quad4/quad8 meshes up to

@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 
+from icewall import sparse
 from icewall.model.build import Model
 from icewall.model.materials import build_groups
 from icewall.model.structure import Structure
-from icewall.solve import sparse
 from icewall.solve.constraints import SupportConstraints
 
 

@@ -234,7 +234,7 @@ def test_quick_ladder_end_to_end(tmp_path, monkeypatch):
             float(coarse["peak"]) / float(finest["peak"]) - 1.0, abs=1e-6)
         assert float(finest["err_peak"]) == 0.0 and float(coarse["err_curve"]) > 0.0
     # the base run's peak is the HDF5 file's largest load, the test error against Table 5.1
-    from icewall.results.summary import summarize
+    from icewall.analysis.summary import summarize
 
     base = next(r for r in rows if r["run"] == "cf4__base")
     assert float(base["peak"]) == pytest.approx(summarize(out / "cf4__base.h5")["max_load"])

@@ -9,11 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from icewall.analysis.mechanism import (
-    MechanismProbe,
-    format_mechanism,
-    mechanism_check,
-)
+from icewall.analysis.mechanism import format_mechanism, mechanism_check
+from icewall.results.probe import MechanismProbe
 from icewall.results.writer import ResultWriter, StepRecord
 from tests.analysis.test_analysis_extract import softening, tiny_mesh
 

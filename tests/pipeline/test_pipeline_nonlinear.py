@@ -102,7 +102,7 @@ def test_mechanism_history_matches_the_stored_stress(cf4_nonlinear):
     """Issue 20 §1: the bottom-plate columns of the history agree with the plate stresses
     recomputed from the stored stress field (icewall.post.plate_stresses) and its plastic
     strain, and the crushed x range with the stored concrete flags."""
-    from icewall.post.common import gauss_points_xy
+    from icewall.mesh.gauss import gauss_points_xy
     from icewall.post.plate_stresses import member_stresses
 
     _, model, report = cf4_nonlinear

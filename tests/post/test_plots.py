@@ -9,7 +9,8 @@ from click.testing import CliRunner
 
 from icewall.cli import main
 from icewall.fem.quadrature import gauss_legendre
-from icewall.post.common import gauss_points_xy, step_at
+from icewall.mesh.gauss import gauss_points_xy
+from icewall.post.common import step_at
 from icewall.post.deformed import auto_scale, interface_motion
 from icewall.post.plate_stresses import member_stresses
 from icewall.post.trajectories import principal_stresses

@@ -138,7 +138,7 @@ def test_environment_values_match_where_they_are_read(monkeypatch):
     """icewall.environment accepts exactly what the solver and the kernel accept."""
     from icewall.environment import VARIABLES
     from icewall.materials.concrete_compiled import KERNELS
-    from icewall.solve.sparse import BACKENDS
+    from icewall.sparse import BACKENDS
 
     assert set(VARIABLES["ICEWALL_SPARSE_SOLVER"][0]) == {"auto", *BACKENDS}
     assert set(VARIABLES["ICEWALL_CONCRETE_KERNEL"][0]) == {"auto", *KERNELS}

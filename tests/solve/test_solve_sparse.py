@@ -1,4 +1,4 @@
-"""The sparse direct solver backends (icewall.solve.sparse): selection and clean fallback,
+"""The sparse direct solver backends (icewall.sparse): selection and clean fallback,
 solutions against dense LAPACK, singular matrices; the one-pass augmented matrix against its
 block definition (eq. 3.35) built densely."""
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import icewall.solve.sparse as sparse
+import icewall.sparse as sparse
 from icewall.errors import ConvergenceError
 from icewall.interface.augmented import augmented_matrix, factorize
 from icewall.interface.gap import FIXED, FREE, SLIP, GapState

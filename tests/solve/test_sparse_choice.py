@@ -1,4 +1,4 @@
-"""The size-based choice of ICEWALL_SPARSE_SOLVER=auto (icewall.solve.sparse.choose_for):
+"""The size-based choice of ICEWALL_SPARSE_SOLVER=auto (icewall.sparse.choose_for):
 installed backends only, fallback to SuperLU, and every backend and SuperLU ordering it can
 pick solving an unsymmetric augmented-like system (zero diagonal block)."""
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import icewall.solve.sparse as sparse
+import icewall.sparse as sparse
 
 SIZES = (10, sparse.AUTO_ORDERING_ROWS, sparse.AUTO_LARGE_ROWS - 1, sparse.AUTO_LARGE_ROWS,
          10**6)

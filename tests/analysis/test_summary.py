@@ -10,9 +10,10 @@ import sys
 import numpy as np
 import pytest
 
+from icewall.analysis.summary import format_summary, summarize
 from icewall.errors import ResultError
 from icewall.mesh.mesh import Mesh, Region
-from icewall.results import ResultWriter, StepRecord, format_summary, summarize
+from icewall.results import ResultWriter, StepRecord
 
 
 def one_cell_mesh() -> Mesh:
@@ -74,7 +75,7 @@ def test_summary_of_empty_and_unfinished_runs(tmp_path):
     assert "max load (w)" in format_summary(s)
     w.finish()
     script = ("import sys, os; sys.path.insert(0, {d!r});"
-              "from test_results_summary import curve_file;"
+              "from test_summary import curve_file;"
               "curve_file({p!r}, n=10, peak_at=4, finish=None); os._exit(3)")
     script = script.format(d=os.path.dirname(__file__), p=str(tmp_path / "killed.h5"))
     assert subprocess.run([sys.executable, "-c", script]).returncode == 3

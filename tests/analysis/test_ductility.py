@@ -8,9 +8,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from icewall.analysis.ductility import csa_ductility
+from icewall.analysis.summary import format_summary, summarize
 from icewall.mesh.mesh import Mesh, Region
-from icewall.post.ductility import csa_ductility
-from icewall.results import ResultWriter, StepRecord, format_summary, summarize
+from icewall.results import ResultWriter, StepRecord
 
 DECK = Path(__file__).resolve().parents[2] / "decks" / "cf4.yaml"
 

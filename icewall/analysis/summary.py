@@ -26,9 +26,9 @@ def solver_label(solver: str | None) -> str:
 
 def summarize(path: str | os.PathLike) -> dict:
     """Key numbers of one analysis as a JSON-serialisable dict (None where there are no steps)."""
+    from icewall.analysis.ductility import result_ductility
     from icewall.analysis.extract import first_maximum, stroke_mask
     from icewall.analysis.mechanism import mechanism_check
-    from icewall.post.ductility import result_ductility
 
     with open_result(path) as r:
         a, h = r.attrs, r.history
@@ -52,7 +52,7 @@ def summarize(path: str | os.PathLike) -> dict:
         "final_deflection": None, "total_iterations": 0, "iterations_per_step_median": None,
         "iterations_per_step_max": None, "run_time_s": a.get("run_time_s"),
         "load_measure": a.get("load_measure"), "load_unit": a.get("load_unit"),
-        "ductility": ductility,  # CSA S474 8.4.4, icewall.post.ductility
+        "ductility": ductility,  # CSA S474 8.4.4, icewall.analysis.ductility
         "snap_throughs": [],  # control deflections where a snap-back drop was accepted
         "jumps": [],  # control deflections reached by a step over a stall (max_jumps)
         # issue 20 §1: bottom plate at the peak vs f_y, first crushing, residual mechanism
