@@ -6,8 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from icewall.deck.fields import option
-
-FORMULATIONS = ("plane_strain", "plane_stress", "axisymmetric")
+from icewall.formulations import FORMULATIONS
 
 SCHEME_DEFAULTS: dict[str, dict[str, float | int]] = {
     "secant": {"tolerance_displacement": 0.05, "tolerance_load": 0.05, "max_iterations": 200,

@@ -12,8 +12,7 @@ import numpy as np
 from icewall.fem.dofs import DofMap
 from icewall.fem.quadrature import Quadrature
 from icewall.fem.shape import shape_derivatives, shape_functions
-
-FORMULATIONS = ("plane_strain", "plane_stress", "axisymmetric")
+from icewall.formulations import check_formulation
 
 
 @dataclass(frozen=True)
@@ -30,11 +29,6 @@ class ElementKinematics:
     @property
     def n_elements(self) -> int:
         return int(self.B.shape[0])
-
-
-def check_formulation(formulation: str) -> None:
-    if formulation not in FORMULATIONS:
-        raise ValueError(f"unknown formulation {formulation!r}; expected one of {FORMULATIONS}")
 
 
 def element_kinematics(points: np.ndarray, cells: np.ndarray, cell_type: str,

@@ -6,9 +6,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from icewall.fem.kinematics import check_formulation
 from icewall.fem.quadrature import line_rule
 from icewall.fem.shape import shape_derivatives, shape_functions
+from icewall.formulations import check_formulation
 
 Traction = np.ndarray | Callable[[np.ndarray], np.ndarray]
 

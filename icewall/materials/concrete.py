@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from icewall.fem.kinematics import check_formulation
+from icewall.formulations import check_formulation
 from icewall.materials.concrete_formulas import (
     changes_sign,
     direction_state,

@@ -32,7 +32,7 @@ from icewall.materials.substep import update_concrete_substepped
 
 KERNEL_VARIABLE = "ICEWALL_CONCRETE_KERNEL"
 KERNELS = ("numpy", "numba")
-FORMULATIONS = ("plane_strain", "axisymmetric")
+COMPILED_FORMULATIONS = ("plane_strain", "axisymmetric")
 TRIAL_STRESSES = ("corotational", "incremental")
 
 
@@ -48,7 +48,7 @@ def numba_installed() -> bool:
 
 def supported(formulation: str, trial_stress: str) -> bool:
     """Whether the kernel covers this formulation and trial stress."""
-    return formulation in FORMULATIONS and trial_stress in TRIAL_STRESSES
+    return formulation in COMPILED_FORMULATIONS and trial_stress in TRIAL_STRESSES
 
 
 def available(formulation: str = "plane_strain", trial_stress: str = "corotational") -> bool:
@@ -64,8 +64,9 @@ def choose_kernel(formulation: str, trial_stress: str, requested: str | None = N
     if name not in KERNELS:
         raise ValueError(f"unknown concrete kernel {name!r}; expected auto or one of {KERNELS}")
     if name == "numba" and not available(formulation, trial_stress):
-        why = (f"it covers {', '.join(FORMULATIONS)} with {', '.join(TRIAL_STRESSES)} trial "
-               f"stresses, not {formulation} with {trial_stress}" if numba_installed()
+        why = (f"it covers {', '.join(COMPILED_FORMULATIONS)} with "
+               f"{', '.join(TRIAL_STRESSES)} trial stresses, not {formulation} with "
+               f"{trial_stress}" if numba_installed()
                else "numba is not installed (pip install icewall[compiled])")
         warnings.warn(f"concrete kernel 'numba': {why}; using numpy", RuntimeWarning,
                       stacklevel=2)
@@ -163,7 +164,7 @@ def compiled_substepped(strain: np.ndarray, state: ConcreteState, params: Any,
 def compiled_floored_moduli(state: ConcreteState, params: Any, formulation: str, floor: float,
                             coaxial: bool = False, returned_secant: bool = False) -> np.ndarray:
     """`concrete_law.floored_moduli` (n, 4, 4) for plane strain and axisymmetric."""
-    if formulation not in FORMULATIONS:
+    if formulation not in COMPILED_FORMULATIONS:
         raise ValueError(f"the compiled moduli do not cover {formulation}")
     secant = matrix_secant(state) if returned_secant else state.secant_modulus
     arrays = [_kernel_array(secant, float)]  # the E_i of floored_moduli

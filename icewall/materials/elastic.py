@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from icewall.fem.kinematics import check_formulation
+from icewall.formulations import check_formulation
 from icewall.materials.law import MaterialLaw, Update
 
 

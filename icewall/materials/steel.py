@@ -19,7 +19,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from icewall.fem.kinematics import check_formulation
+from icewall.formulations import check_formulation
 from icewall.materials.elastic import elastic_moduli
 from icewall.materials.law import MaterialLaw, Update
 

@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from icewall.formulations import FORMULATIONS
 from icewall.materials.concrete import concrete_tangent, update_concrete
 from icewall.materials.concrete_state import ConcreteState
 from icewall.materials.elastic import plane_stress_strain_zz
@@ -26,7 +27,6 @@ from icewall.materials.orthotropic import (
 from icewall.materials.parameters import derive_concrete_parameters
 from icewall.materials.ultimate_surface import failure_function
 
-FORMULATIONS = ("plane_strain", "plane_stress", "axisymmetric")
 PARAMS = derive_concrete_parameters(53.5, 100.0)
 
 

@@ -13,6 +13,7 @@ from functools import partial
 import numpy as np
 import pytest
 
+from icewall.formulations import FORMULATIONS
 from icewall.materials.concrete import update_concrete
 from icewall.materials.concrete_state import ConcreteState
 from icewall.materials.concrete_tangent import consistent_tangent, update_with_tangent
@@ -24,7 +25,6 @@ from icewall.materials.ultimate_surface import strength_scale, strength_scale_gr
 PARAMS = derive_concrete_parameters(53.5, 50.0)
 ET = PARAMS.ft / PARAMS.E0  # cracking strain
 EC = PARAMS.eps_c
-FORMULATIONS = ("plane_strain", "plane_stress", "axisymmetric")
 TRIALS = ("corotational", "incremental")
 
 # committed strain path (each row committed in turn), then the strain the tangent is taken at

@@ -16,6 +16,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from icewall.formulations import FORMULATIONS
 from icewall.materials import steel
 from icewall.materials.steel import (
     SteelState,
@@ -28,7 +29,6 @@ from icewall.materials.steel import (
 
 E, NU, FY = 200_000.0, 0.3, 300.0
 G, K = E / (2 * (1 + NU)), E / (3 * (1 - 2 * NU))
-FORMULATIONS = ("plane_strain", "plane_stress", "axisymmetric")
 
 
 def params(formulation: str, **kw):
