@@ -36,7 +36,7 @@ from icewall.pipeline import run_deck  # noqa: E402
 DECKS = Path(__file__).resolve().parents[2] / "decks"
 PARAMS = derive_concrete_parameters(53.5, 100.0)
 ET, EC = PARAMS.eps_t, PARAMS.eps_c
-FORMULATIONS = ("plane_strain", "axisymmetric")
+FORMULATIONS = compiled.COMPILED_FORMULATIONS  # what the kernel covers
 TRIALS = ("corotational", "incremental")
 STEPS = 24
 
