@@ -1,4 +1,7 @@
-"""The `icewall` command: a thin shell over the library (parse, call, map errors to exit codes)."""
+"""The `icewall` command: a thin shell over the library (parse, call, map errors to exit codes).
+
+The commands import the library inside their bodies, so `icewall --help` loads neither NumPy
+nor SciPy nor h5py, and `icewall check` no NumPy."""
 
 from __future__ import annotations
 
@@ -13,7 +16,7 @@ import click
 
 from icewall import __version__
 from icewall.environment import check_environment
-from icewall.errors import IcewallError, Interrupted
+from icewall.errors import DeckError, IcewallError, Interrupted
 
 SET_HELP = "Override a deck value, e.g. --set materials.concrete.fc=40 (repeatable)."
 
@@ -72,7 +75,6 @@ def _warn_resources(loaded, output_dir: str | None = None) -> None:
     converging; refuse (exit 2) a result larger than the free disk of `output_dir` [default
     outputs.directory] unless analysis.allow_large."""
     from icewall.deck.resources import estimate, output_refusal, warnings_for
-    from icewall.errors import DeckError
     from icewall.solve.settings import scheme_warnings
 
     deck = loaded.deck

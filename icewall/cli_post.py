@@ -1,5 +1,6 @@
 """The post-processing commands `icewall plot`, `export` and `report` (registered on the main
-group by icewall.cli). Heavy imports (matplotlib, meshio) happen inside the commands only."""
+group by icewall.cli). The library (NumPy, matplotlib, meshio) is imported inside the commands
+only, so `icewall --help` stays fast."""
 
 from __future__ import annotations
 

@@ -2,7 +2,8 @@
 
 Registered on icewall.cli.main, which also wraps the callbacks in its error handling (one-line
 errors, exit codes); this module does not import icewall.cli (`python -m icewall.cli` would
-import it twice, the second time in a circle).
+import it twice, the second time in a circle). The command imports the library in its body, so
+`icewall --help` stays fast.
 """
 
 from __future__ import annotations

@@ -15,11 +15,14 @@ import numpy as np
 
 from icewall import __version__
 from icewall.deck.load import LoadedDeck
-from icewall.errors import ResultError
+from icewall.errors import ConvergenceError, ResultError
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
+from icewall.model.params_report import concrete_parameter_rows
 from icewall.results.checkpoint import checkpoint_path, read_checkpoint
 from icewall.results.output_safety import OutputLock
+from icewall.results.probe import MechanismProbe, crushed_points, yielded_points
+from icewall.results.reader import open_result
 from icewall.results.writer import (
     PARTIAL_SUFFIX,
     ResultWriter,
@@ -28,6 +31,7 @@ from icewall.results.writer import (
     refuse_output_links,
 )
 from icewall.solve.linear_static import run_linear
+from icewall.solve.nonlinear import run_nonlinear
 
 
 @dataclass
@@ -101,8 +105,6 @@ class ResumePoint:
 def resume_point(loaded: LoadedDeck, path: Path) -> ResumePoint:
     """Check that `path`.partial is an interrupted run of `loaded` (same deck text and --set)
     and find the last step its checkpoint can go on from; ResultError otherwise."""
-    from icewall.results.reader import open_result
-
     partial = Path(str(path) + PARTIAL_SUFFIX)
     if not partial.exists():
         done = f" ({path} exists: the run finished)" if path.exists() else ""
@@ -205,8 +207,6 @@ def softening_warnings(deck, mesh) -> list[str]:
     back at the material level; `icewall params`), for a nonlinear concrete analysis."""
     if deck.analysis.solver != "nonlinear" or deck.materials.concrete.model != "rotating_crack":
         return []
-    from icewall.model.params_report import concrete_parameter_rows
-
     return [f"{row['region']}: {warning}" for row in concrete_parameter_rows(deck, mesh)
             for warning in row["warnings"]]
 
@@ -240,10 +240,6 @@ def _write_linear(model, writer: ResultWriter, fields: set[str], say, timings) -
 
 def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings,
                      restart: ResumePoint | None = None) -> tuple[int, str, str]:
-    from icewall.errors import ConvergenceError
-    from icewall.results.probe import MechanismProbe, crushed_points, yielded_points
-    from icewall.solve.nonlinear import run_nonlinear
-
     restart = restart if restart is not None and restart.checkpoint is not None else None
     deck, write_time = model.deck, 0.0
     first, elapsed = (restart.n_steps, restart.wall_time) if restart else (0, 0.0)

@@ -50,7 +50,12 @@ from pathlib import Path
 
 import yaml
 
+from icewall import __version__
+from icewall.analysis.extract import extract
+from icewall.analysis.reference import find_reference
+from icewall.deck.load import load_deck_text
 from icewall.errors import IcewallError, ResultError
+from icewall.results.reader import open_result
 
 PEAK_TOL = 0.03
 RESIDUAL_TOL = 0.10
@@ -92,10 +97,6 @@ def _round(value):
 def measure(path: str | os.PathLike) -> dict:
     """The baseline record of one result file (keys: see the module docstring)."""
     import h5py
-
-    from icewall.analysis.extract import extract
-    from icewall.deck.load import load_deck_text
-    from icewall.results.reader import open_result
 
     with open_result(path) as res:
         attrs, text, status = res.attrs, res.deck_text, res.status
@@ -189,8 +190,6 @@ def make_baseline(records: Mapping[str, dict], *, command: str, peak_tol: float 
     """The baseline data (header and runs) of measured records; `realizations` (run name ->
     the records of its round-off realizations, the run's own included) adds the bands those
     span to each run (:func:`realization_bands`)."""
-    from icewall import __version__
-
     mean, n = mean_ratio(records)
     runs = {name: {k: records[name].get(k) for k in _RECORD_KEYS} for name in sorted(records)}
     for name, group in (realizations or {}).items():
@@ -236,8 +235,6 @@ def write_baseline(path: str | os.PathLike, data: dict) -> None:
 # -- the comparison ----------------------------------------------------------------------------
 def _test_ratio(record: dict) -> float | None:
     """Test / predicted ultimate load of one record (None: no test value or no peak)."""
-    from icewall.analysis.reference import find_reference
-
     ref = find_reference(record.get("specimen") or "")
     peak, unit = record.get("peak_load"), record.get("unit")
     if ref is None or ref.ultimate_test is None or not peak or peak <= 0:

@@ -17,6 +17,9 @@ from pathlib import Path
 
 from icewall.analysis.baseline import DECKS_DIR, measure_results
 from icewall.analysis.compare import compare_command
+from icewall.analysis.sweep import expand_jobs, finished_status, realization_name, with_realizations
+from icewall.analysis.sweep_runners import run_local
+from icewall.analysis.sweep_table import build_rows, format_table, ratio_stats, write_csv
 from icewall.errors import IcewallError, ResultError
 
 # The CI tolerances (issue 18), written into the header of a rewritten baseline. The bands
@@ -58,8 +61,6 @@ def ci_jobs(outdir: str | os.PathLike, variants: Mapping[str, Iterable[str]] | N
             decks_dir: str | os.PathLike = DECKS_DIR, realizations: int = 1) -> list:
     """Sweep jobs of the CI variants (run name = deck stem) with their round-off realizations
     (icewall.analysis.sweep.with_realizations: `<stem>.r<k>`) when realizations > 1."""
-    from icewall.analysis.sweep import expand_jobs, with_realizations
-
     jobs = []
     for name, overrides in (variants or CI_VARIANTS).items():
         jobs += expand_jobs([Path(decks_dir) / f"{name}.yaml"], list(overrides), None, outdir)
@@ -72,10 +73,6 @@ def run_variants(outdir: str | os.PathLike, workers: int | None = None,
     """Run the CI variants (and their realizations) in a local process pool (finished runs
     are skipped, as in `icewall sweep`); writes OUTDIR/<name>.h5 and OUTDIR/sweep_summary.csv.
     Returns the per-run results (name, path, status, run_time_s, ...)."""
-    from icewall.analysis.sweep import finished_status
-    from icewall.analysis.sweep_runners import run_local
-    from icewall.analysis.sweep_table import build_rows, format_table, ratio_stats, write_csv
-
     os.makedirs(outdir, exist_ok=True)
     jobs = ci_jobs(outdir, variants, realizations=realizations)
     results: dict[str, dict] = {}
@@ -130,8 +127,6 @@ def run_ci_comparison(outdir: str | os.PathLike, baseline: str | os.PathLike = B
         raise ResultError(f"no CI run left a result in {outdir}")
     groups, measured = None, own
     if update:  # every realization measured once; the variants' own records are among them
-        from icewall.analysis.sweep import realization_name
-
         records = measure_results(list(paths.values()))
         groups = {name: [records[realization_name(name, k)] for k in range(realizations)
                          if realization_name(name, k) in records] for name in CI_VARIANTS}

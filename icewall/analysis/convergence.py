@@ -42,10 +42,14 @@ from pathlib import Path
 import numpy as np
 
 from icewall.analysis import convergence_table as ct
-from icewall.analysis.extract import RESIDUAL_DEFLECTION
-from icewall.analysis.sweep import FINISHED, finished_status, make_output_directory
+from icewall.analysis.extract import RESIDUAL_DEFLECTION, extract
+from icewall.analysis.reference import find_reference
+from icewall.analysis.sweep import FINISHED, finished_status, make_output_directory, reuse_verdict
 from icewall.analysis.sweep_runners import Job, run_job, run_local
+from icewall.deck.load import load_deck
+from icewall.deck.yamlsrc import read_yaml
 from icewall.errors import DeckError, ResultError
+from icewall.results.reader import open_result
 
 DEFAULT_LADDER = {"families": {
     "element_size": {"keys": "analysis.element_size", "values": [150, 100, 75, 50, 37.5],
@@ -109,8 +113,6 @@ def parse_ladder(data, where: str = "ladder") -> list[Family]:
 
 def read_ladder(path: str | os.PathLike) -> list[Family]:
     """Families of a ladder file (YAML)."""
-    from icewall.deck.yamlsrc import read_yaml
-
     return parse_ladder(read_yaml(path)[1], str(path))
 
 
@@ -134,8 +136,6 @@ def build_jobs(deck_path: str, families: list[Family], sets: Iterable[str] = (),
                ) -> tuple[list[dict], Job, float]:
     """One level per (family, value): dicts {family, value, job, nominal, h_kind}; the base
     job; the residual deflection. Every job's deck is loaded (validated) here, before any run."""
-    from icewall.deck.load import load_deck
-
     fixed = (*FIXED, *sets)
     deck = load_deck(deck_path, fixed).deck
     stem = Path(deck_path).stem
@@ -179,9 +179,6 @@ def measure_run(path: str, residual_at: float = RESIDUAL_DEFLECTION) -> dict:
     """Quantities and costs of one result file: peak, its deflection, residual at
     `residual_at` mm, the curve (the extractor's: start point then the control steps),
     iterations, elements, h (sqrt of the mean concrete element area)."""
-    from icewall.analysis.extract import extract
-    from icewall.results.reader import open_result
-
     with open_result(path) as res:
         hist, attrs, mesh = res.history, res.attrs, res.mesh
     fig = extract(hist, residual_deflection=residual_at)  # the history read once, here
@@ -206,12 +203,8 @@ def measure_run(path: str, residual_at: float = RESIDUAL_DEFLECTION) -> dict:
 
 
 def _test_values(specimen: str | None, deck_path: str) -> dict:
-    from icewall.analysis.reference import find_reference
-
     ref = find_reference(specimen) if specimen else None
     if ref is None:
-        from icewall.deck.load import load_deck
-
         ref = load_deck(deck_path).deck.specimen.reference
     return {"peak": ref.ultimate_test, "residual": ref.residual_test}
 
@@ -317,9 +310,6 @@ def plot(path: str, rows: list[dict], title: str) -> bool:
 
 def _stored(job: Job, say: Callable[[str], None]) -> dict:
     """The result of `job` as its file in the output directory holds it (--tables-only)."""
-    from icewall.analysis.sweep import reuse_verdict
-    from icewall.results.reader import open_result
-
     if not os.path.exists(job.output):
         say(f"{job.name}: no result file: not tabled")
         return {"status": "missing"}

@@ -27,6 +27,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from icewall.analysis.extract import stroke_curve
+from icewall.deck.load import load_deck_text
+from icewall.errors import IcewallError
+from icewall.model.loads import jack_count, load_measure
+
 REQUIRED_RATIO = 6.0  # clause 8.4.4: six times the yield deflection
 LOAD_FRACTION = 0.5  # ... while keeping 50 % of the yield load
 _EPS = 1e-12
@@ -121,10 +126,6 @@ def csa_ductility(deflection, load, *, origin: float = 0.0, initial_points: int 
 def energy_factor(deck_text: str, deck_path: str, overrides: list[str]) -> float | None:
     """Total jack load (N) per unit of the reported load measure, from the stored deck (w:
     n_jacks b L_trib; total load: 1); None when the deck cannot be read."""
-    from icewall.deck.load import load_deck_text
-    from icewall.errors import IcewallError
-    from icewall.model.loads import jack_count, load_measure
-
     try:
         deck = load_deck_text(deck_text, deck_path, overrides).deck
     except (IcewallError, ValueError, TypeError, KeyError):
@@ -146,8 +147,6 @@ def result_ductility(result) -> dict:
     if not control.any():
         return {"verdict": "undecided", "message": "no displacement-control steps"}
     origin = float(d[~control][-1]) if (~control).any() else 0.0
-    from icewall.analysis.extract import stroke_curve
-
     try:
         out = csa_ductility(*stroke_curve(d[control], p[control]), origin=origin).as_dict()
     except ValueError as exc:  # e.g. a snap-back: the deflection went back

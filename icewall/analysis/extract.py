@@ -47,6 +47,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from icewall.results.reader import open_result
+
 RESIDUAL_DEFLECTION = 40.0  # mm
 PLATEAU_OFFSET = 10.0  # mm past the peak
 PLATEAU_START_MIN = 20.0  # mm
@@ -177,8 +179,6 @@ def _normalise(source) -> tuple[dict, dict]:
 
 
 def _from_file(path) -> tuple[dict, dict]:
-    from icewall.results.reader import open_result
-
     with open_result(path) as r:
         hist = dict(r.history)
         hist["deflection"] = hist.pop("control_displacement")

@@ -38,6 +38,8 @@ import os
 
 import numpy as np
 
+from icewall.analysis.extract import control_curve, extract
+from icewall.deck.load import load_deck_text
 from icewall.results.probe import (
     PLATE_COLUMNS,
     SECTION_COLUMN,
@@ -46,6 +48,7 @@ from icewall.results.probe import (
     YIELD_COLUMN,
     MechanismProbe,
 )
+from icewall.results.reader import open_result
 
 RESIDUAL_DEFLECTION = 40.0  # mm
 
@@ -62,8 +65,6 @@ def thesis_plate_statement(specimen: str | None) -> bool | None:
 # -- the check of a result file -----------------------------------------------------------------
 def _yield_stress(result) -> float | None:
     import json
-
-    from icewall.deck.load import load_deck_text
 
     try:
         overrides = json.loads(result.attrs.get("deck_overrides", "[]"))
@@ -122,9 +123,6 @@ def _first_crush_row(hist: dict, rows: np.ndarray) -> int | None:
 
 def mechanism_check(path: str | os.PathLike) -> dict:
     """The §1 checks of one result file (module docstring), as a JSON-ready dict."""
-    from icewall.analysis.extract import control_curve
-    from icewall.results.reader import open_result
-
     with open_result(path) as r:
         hist, f_y, specimen = r.history, _yield_stress(r), r.attrs.get("specimen")
         names = {reg.tag: reg.name for reg in r.mesh.regions}
@@ -165,8 +163,6 @@ def mechanism_check(path: str | os.PathLike) -> dict:
 def _crush_from_fields(path) -> dict | None:
     """First crushing of a file without the history columns: icewall.analysis.extract's
     event, with its element centroid where concrete_flags was stored."""
-    from icewall.analysis.extract import extract
-
     event = extract(path).get("first_crushing")
     if event is None:
         return None

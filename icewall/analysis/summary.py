@@ -7,7 +7,12 @@ import os
 
 import numpy as np
 
+from icewall.analysis.ductility import result_ductility
+from icewall.analysis.extract import FIRST_PEAK_SOFTENING, first_maximum, stroke_mask
+from icewall.analysis.mechanism import format_mechanism, mechanism_check
 from icewall.deck.analysis_options import CONVERGED_TOLERANCE
+from icewall.deck.load import load_deck_text
+from icewall.errors import DeckError
 from icewall.results.reader import open_result
 
 _NO_FINISH = "no finish record: run still going, or killed"
@@ -26,10 +31,6 @@ def solver_label(solver: str | None) -> str:
 
 def summarize(path: str | os.PathLike) -> dict:
     """Key numbers of one analysis as a JSON-serialisable dict (None where there are no steps)."""
-    from icewall.analysis.ductility import result_ductility
-    from icewall.analysis.extract import first_maximum, stroke_mask
-    from icewall.analysis.mechanism import mechanism_check
-
     with open_result(path) as r:
         a, h = r.attrs, r.history
         deck_text = r.deck_text
@@ -85,9 +86,6 @@ def summarize(path: str | os.PathLike) -> dict:
 def _equilibrium(history, deck_text: str, overrides: list[str]) -> dict:
     """The largest load and displacement norms (eqs. 4.4-4.5) over the stored steps and, where
     the stored deck (with the run's --set overrides) reads, its scheme and tolerances."""
-    from icewall.deck.load import load_deck_text
-    from icewall.errors import DeckError
-
     out = {"largest_load_norm": float(np.max(history["load_norm"])),
            "largest_displacement_norm": float(np.max(history["displacement_norm"])),
            "scheme": None, "tolerance_load": None, "tolerance_displacement": None}
@@ -164,8 +162,6 @@ def _equilibrium_text(e: dict | None, jumped: bool) -> str:
 
 def _first_maximum_text(s: dict, unit: str) -> str:
     """The first maximum, and whether the curve climbs past it later (a second hump)."""
-    from icewall.analysis.extract import FIRST_PEAK_SOFTENING
-
     first = s.get("first_max_load")
     if first is None:
         return "-"
@@ -178,8 +174,6 @@ def _first_maximum_text(s: dict, unit: str) -> str:
 
 def format_summary(summary: dict) -> str:
     """Human-readable block of aligned ``key : value unit`` lines."""
-    from icewall.analysis.mechanism import format_mechanism
-
     s = summary
     lu = s.get("load_unit") or ""
     measure = s.get("load_measure")

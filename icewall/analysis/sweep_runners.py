@@ -10,7 +10,9 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from icewall.deck.load import load_deck
 from icewall.errors import IcewallError, Interrupted
+from icewall.pipeline import run_deck
 
 
 @dataclass(frozen=True)
@@ -36,9 +38,6 @@ def run_job(job: Job) -> dict:
            "run_time_s": 0.0, "n_steps": 0}
     _RUN_IN_PROGRESS = True
     try:
-        from icewall.deck.load import load_deck
-        from icewall.pipeline import run_deck
-
         loaded = load_deck(job.deck, job.overrides)
         report = run_deck(loaded, job.output, progress=None, replace=True,
                           attrs={"sweep_overrides": json.dumps(list(job.overrides))})

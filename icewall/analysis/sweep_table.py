@@ -25,6 +25,13 @@ import os
 
 import numpy as np
 
+from icewall.analysis.ductility import result_ductility
+from icewall.analysis.extract import extract
+from icewall.analysis.mechanism import mechanism_check
+from icewall.analysis.reference import find_reference
+from icewall.deck.load import load_deck
+from icewall.results.reader import open_result
+
 RESIDUAL_AT = 40.0  # mm
 RATIOS = {  # column -> (reference field, our measure)
     "ult_test/pred": ("ultimate_test", "peak"),
@@ -47,10 +54,6 @@ _SCALE = {"N": 1.0, "kN": 1e3, "MN": 1e6, "MPa": 1.0, "N/mm2": 1.0}
 def _measures(path: str) -> dict:
     """Peak load, its deflection and the residual load at 40 mm of one result file, as the
     shared extractor (icewall.analysis.extract) defines them."""
-    from icewall.analysis.ductility import result_ductility
-    from icewall.analysis.extract import extract
-    from icewall.results.reader import open_result
-
     with open_result(path) as res:
         attrs = res.attrs
         ductility = result_ductility(res) if attrs.get("n_steps") else {}
@@ -68,8 +71,6 @@ def _measures(path: str) -> dict:
 
 def _mechanism(path: str) -> dict:
     """The MECHANISM columns of one result (icewall.analysis.mechanism)."""
-    from icewall.analysis.mechanism import mechanism_check
-
     try:
         check = mechanism_check(path)
     except Exception as exc:  # noqa: BLE001 - the row keeps its loads; the check says why
@@ -96,19 +97,10 @@ def _verdict(ductility: dict) -> str | None:
 
 def _references(job, specimen: str | None) -> tuple[dict, str | None]:
     """Reference values of a job's specimen and their unit (None: the deck's load unit)."""
+    ref = find_reference(specimen) if specimen else None
+    if ref is not None:
+        return {k: getattr(ref, k) for k, _ in RATIOS.values()}, ref.unit
     try:
-        from icewall.analysis import reference
-    except ImportError:
-        reference = None
-    if reference is not None and specimen:
-        find = getattr(reference, "find_reference", None)
-        ref = find(specimen) if find else reference.load_reference().get(specimen)
-        if ref is not None:
-            return ({k: getattr(ref, k, None) for k, _ in RATIOS.values()},
-                    getattr(ref, "unit", None))
-    try:
-        from icewall.deck.load import load_deck
-
         ref = load_deck(job.deck, job.overrides).deck.specimen.reference
     except Exception:  # noqa: BLE001 - a broken deck has no reference values
         return {}, None

@@ -76,7 +76,7 @@ def choose_kernel(formulation: str, trial_stress: str, requested: str | None = N
 
 @cache
 def _kernels() -> ModuleType:
-    from icewall.materials import concrete_kernels_compiled
+    from icewall.materials import concrete_kernels_compiled  # numba: the compiled extra
 
     return concrete_kernels_compiled
 

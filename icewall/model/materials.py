@@ -11,9 +11,13 @@ import numpy as np
 
 from icewall.deck.analysis_options import Analysis
 from icewall.deck.schema import Concrete, Steel
+from icewall.materials.concrete_compiled import choose_kernel
+from icewall.materials.concrete_law import ConcreteLaw
 from icewall.materials.elastic import ElasticLaw, elastic_moduli
 from icewall.materials.law import MaterialLaw
 from icewall.materials.parameters import ConcreteParameters, derive_concrete_parameters
+from icewall.materials.steel import SteelLaw, steel_parameters
+from icewall.materials.ultimate_surface import hydrostatic_points
 from icewall.model.description import MATERIAL_KEYS, ModelDescription
 
 
@@ -65,8 +69,6 @@ def concrete_parameters(c: Concrete, h_c: float) -> ConcreteParameters:
 
 
 def _surface_points(f1_ratio: float, f2_ratio: float):
-    from icewall.materials.ultimate_surface import hydrostatic_points
-
     return hydrostatic_points(f1=f1_ratio, f2=f2_ratio)
 
 
@@ -105,9 +107,6 @@ def initial_elastic(name: str, section: Any, h_c: float) -> tuple[float, float]:
 def _concrete_law(c: Concrete, analysis: Analysis, params: ConcreteParameters,
                   h_points: np.ndarray) -> MaterialLaw:
     """A rotating-crack concrete section at points of crack-band widths `h_points`."""
-    from icewall.materials.concrete_compiled import choose_kernel
-    from icewall.materials.concrete_law import ConcreteLaw
-
     fixed = {key: getattr(c, key) for key in ("k_t", "k_c") if getattr(c, key) is not None}
     floor = analysis.iteration_stiffness_floor
     tangent = analysis.concrete_stiffness == "tangent"
@@ -122,8 +121,6 @@ def _concrete_law(c: Concrete, analysis: Analysis, params: ConcreteParameters,
 
 
 def _steel_law(s: Steel, analysis_formulation: str) -> MaterialLaw:
-    from icewall.materials.steel import SteelLaw, steel_parameters
-
     formulation = analysis_formulation if s.formulation == "same" else s.formulation
     return SteelLaw(steel_parameters(s.E, s.nu, s.fy, hardening_ratio=s.hardening,
                                      formulation=formulation, fy_reduction=s.fy_reduction))

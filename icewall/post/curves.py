@@ -8,8 +8,11 @@ from pathlib import Path
 import numpy as np
 
 from icewall.analysis.extract import control_curve
-from icewall.errors import ResultError
+from icewall.analysis.reference import find_reference
+from icewall.deck.load import load_deck_text
+from icewall.errors import IcewallError, ResultError
 from icewall.post.common import load_axis
+from icewall.post.figures import legend_above, pyplot
 from icewall.results.reader import open_result
 
 RESIDUAL_AT = 40.0  # mm, where the residual is compared (icewall.analysis.sweep_table)
@@ -19,15 +22,10 @@ RESIDUAL_FROM = 20.0  # mm, start of the residual marker (the plateau of the ext
 def reference_loads(attrs: dict, deck_text: str, path: str) -> dict:
     """Test ultimate and residual loads of the run's specimen in the run's load unit (reference
     data of icewall.analysis.reference, else the deck's specimen.reference); {} if unknown."""
-    from icewall.analysis.reference import find_reference
-
     unit = attrs.get("load_unit")
     ref = find_reference(str(attrs.get("specimen") or ""))
     if ref is not None and ref.unit == unit:
         return {k: getattr(ref, k) for k in ("ultimate_test", "residual_test")}
-    from icewall.deck.load import load_deck_text
-    from icewall.errors import IcewallError
-
     try:
         overrides = json.loads(attrs.get("deck_overrides") or "[]")
         deck_ref = load_deck_text(deck_text, path, overrides).deck.specimen.reference
@@ -52,8 +50,6 @@ def read_curve(path: str | Path, label: str | None = None) -> dict:
 def plot_curves(paths: list[str | Path], labels: list[str] | None = None):
     """Figure with the curves of `paths` overlaid, each run's peak marked, and per specimen the
     test's peak (dashed level) and residual (dotted level over 20-40 mm) in the run's colour."""
-    from icewall.post.figures import legend_above, pyplot
-
     plt = pyplot()
     curves = [read_curve(p, (labels or [None] * len(paths))[i]) for i, p in enumerate(paths)]
     axis = {load_axis(c["attrs"]) for c in curves}

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from icewall.post.common import cell_outlines
+from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
+
 SHOWN_FRACTION = 0.05  # automatic scale: largest displacement drawn as 5 % of the wall length
 GAP_TOLERANCE = 0.01  # mm: smaller relative displacements are not marked
 
@@ -39,9 +42,6 @@ def plot_deformed(result, step: int, scale: float | None = None,
     undeformed outline, the interface pairs that opened (red) or slipped (orange) by more than
     `tolerance` joined by a line from the steel node to the concrete node."""
     from matplotlib.collections import LineCollection, PolyCollection
-
-    from icewall.post.common import cell_outlines
-    from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
 
     mesh, u = result.mesh, result.displacement(step)
     scale = auto_scale(mesh.points, u) if scale is None else scale

@@ -11,8 +11,15 @@ from datetime import datetime
 from pathlib import Path
 
 from icewall import __version__
+from icewall.analysis.ductility import result_ductility
+from icewall.analysis.extract import extract
+from icewall.analysis.reference import ratio_stats
 from icewall.analysis.summary import LINEAR_NOTE, solver_label
 from icewall.errors import ResultError
+from icewall.post.common import step_at
+from icewall.post.curves import plot_curves, reference_loads
+from icewall.post.figures import pyplot
+from icewall.post.patterns import plot_cracks
 from icewall.results.reader import open_result
 
 RESIDUAL_AT = 40.0  # mm
@@ -36,10 +43,6 @@ def run_name(path: str | Path) -> str:
 def validation_row(path: str | Path) -> dict:
     """One table row: peak and load at 40 mm (icewall.analysis.extract), the test values, the
     test/predicted ratios, and the clause 8.4.4 ductility check."""
-    from icewall.analysis.ductility import result_ductility
-    from icewall.analysis.extract import extract
-    from icewall.post.curves import reference_loads
-
     with open_result(path) as r:
         attrs, deck_text = dict(r.attrs), r.deck_text
         linear = attrs.get("solver") == "linear"
@@ -80,8 +83,6 @@ def _cell(row: dict, key: str) -> str:
 
 def table_html(rows: list[dict]) -> str:
     """The validation table with a mean and a CoV row of the ratios."""
-    from icewall.analysis.reference import ratio_stats
-
     head = "".join(f"<th>{html.escape(label)}</th>" for _, label in COLUMNS)
     body = [f'<tr class="run">{"".join(_cell(r, k) for k, _ in COLUMNS)}</tr>' for r in rows]
     stats = {k: ratio_stats(r[k] for r in rows) for k in ("ult_ratio", "res_ratio")}
@@ -97,8 +98,6 @@ def table_html(rows: list[dict]) -> str:
 
 def png_tag(fig, alt: str) -> str:
     """The figure as an <img> with an embedded base64 PNG (the figure is closed)."""
-    from icewall.post.figures import pyplot
-
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
     pyplot().close(fig)
@@ -111,9 +110,6 @@ def _figure(tag: str, caption: str) -> str:
 
 
 def _patterns(path: str | Path) -> list[str]:
-    from icewall.post.common import step_at
-    from icewall.post.patterns import plot_cracks
-
     parts = []
     with open_result(path) as r:
         for at in PATTERNS_AT:
@@ -145,8 +141,6 @@ def _ductility_html(rows: list[dict]) -> str:
 
 def build_report(paths: list[str | Path], out: str | Path, title: str | None = None) -> Path:
     """Write the HTML page for the result files `paths` to `out`; returns `out`."""
-    from icewall.post.curves import plot_curves
-
     if not paths:
         raise ResultError("no result files given for the report")
     rows = [validation_row(p) for p in paths]

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from icewall.errors import ResultError
+from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
+
 # gap-element states as stored in /steps/N/interface/state (icewall.interface.gap)
 STATES = {0: ("stick", "tab:green", "s"), 1: ("slip", "tab:orange", ">"),
           2: ("open", "tab:red", "o")}
@@ -11,8 +14,6 @@ STATES = {0: ("stick", "tab:green", "s"), 1: ("slip", "tab:orange", ">"),
 
 def interface_states(result, step: int) -> tuple[np.ndarray, np.ndarray]:
     """(positions (n_pairs, 2) of the pairs' concrete nodes, states (n_pairs,)) at `step`."""
-    from icewall.errors import ResultError
-
     mesh = result.mesh
     if not len(mesh.interface_pairs):
         raise ResultError(f"{result.path}: the model has no interface pairs (bonded interface)")
@@ -26,8 +27,6 @@ def interface_states(result, step: int) -> tuple[np.ndarray, np.ndarray]:
 
 def plot_interface_map(result, step: int):
     """Figure of the interface state of every pair at a stored `step`."""
-    from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
-
     xy, state = interface_states(result, step)
     mesh = result.mesh
     fig, (ax,) = wall_figure(mesh)

@@ -12,6 +12,7 @@ import numpy as np
 
 from icewall.mesh.gauss import gauss_points_xy
 from icewall.post.common import gauss_order, gauss_spacing, require_fields
+from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
 
 MARK_FRACTION = 0.8  # crack line length / Gauss-point spacing of its cell
 
@@ -44,8 +45,6 @@ def segments(centres: np.ndarray, angles: np.ndarray, lengths: np.ndarray) -> np
 def plot_cracks(result, step: int):
     """Figure of the crack and crush pattern of an open ResultFile at a stored `step`."""
     from matplotlib.collections import LineCollection
-
-    from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
 
     require_fields(result, step, ("concrete_flags", "orthotropy_angle"), "the crack pattern")
     flags = result.gauss(step, "concrete_flags")

@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from icewall.mesh.gauss import gauss_points_xy, gauss_volumes
-from icewall.post.common import cells_of_region, gauss_order
+from icewall.post.common import cells_of_region, gauss_order, require_fields
+from icewall.post.figures import legend_above, pyplot, step_title
 
 PLATES = ("top_plate", "bottom_plate")
 COMPONENT = {0: 0, 1: 1}  # axis along the member -> stress component (xx, yy)
@@ -41,9 +42,6 @@ def member_stresses(mesh, stress: np.ndarray, order: int) -> dict[str, tuple]:
 
 def plot_plate_stresses(result, step: int):
     """Two panels: sigma_xx along the plates, sigma_yy up the diaphragms, at a stored step."""
-    from icewall.post.common import require_fields
-    from icewall.post.figures import legend_above, pyplot, step_title
-
     require_fields(result, step, ("stress",), "the plate stresses")
     stress = result.gauss(step, "stress")
     members = member_stresses(result.mesh, stress, gauss_order(result, stress))

@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from icewall.mesh.gauss import gauss_points_xy
-from icewall.post.common import cells_of_kind, gauss_order, gauss_spacing
+from icewall.post.common import cells_of_kind, gauss_order, gauss_spacing, require_fields
+from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
 
 
 def principal_stresses(stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -36,9 +37,6 @@ def trajectory_lines(xy: np.ndarray, stress: np.ndarray, length: np.ndarray
 def plot_trajectories(result, step: int):
     """Figure of the principal stress trajectories of the concrete at a stored `step`."""
     from matplotlib.collections import LineCollection
-
-    from icewall.post.common import require_fields
-    from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
 
     require_fields(result, step, ("stress",), "the stress trajectories")
     stress, mesh = result.gauss(step, "stress"), result.mesh

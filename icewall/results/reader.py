@@ -9,7 +9,8 @@ from contextlib import contextmanager
 import h5py
 import numpy as np
 
-from icewall.errors import ResultError
+from icewall.deck.load import load_deck_text
+from icewall.errors import IcewallError, ResultError
 from icewall.mesh.mesh import Mesh, Region
 from icewall.results.writer import CORE_COLUMNS, FORMAT, FORMAT_VERSION, PARTIAL_SUFFIX
 
@@ -99,9 +100,6 @@ class ResultFile:
         """History steps whose Gauss/nodal fields the stored deck says were written
         (outputs.fields not empty, every outputs.every-th step) but the file lacks: a damaged
         file (an empty list where the deck cannot be read)."""
-        from icewall.deck.load import load_deck_text
-        from icewall.errors import IcewallError
-
         try:
             outputs = load_deck_text(self.deck_text, self.path).deck.outputs
         except (IcewallError, AttributeError, TypeError, ValueError):

@@ -13,6 +13,7 @@ from icewall.model.build import Model
 from icewall.model.materials import build_groups
 from icewall.model.structure import Structure
 from icewall.solve.constraints import SupportConstraints
+from icewall.solve.gap_constraints import GapConstraints
 
 
 @dataclass(frozen=True)
@@ -46,8 +47,6 @@ def build_problem(model: Model, scheme: str = "secant") -> Problem:
 def make_constraints(model: Model):
     """Supports only when the interfaces are bonded or tied; gap elements otherwise."""
     if model.description.interface.model == "gap" and len(model.mesh.interface_pairs):
-        from icewall.solve.gap_constraints import GapConstraints
-
         return GapConstraints(model)
     return SupportConstraints(model.dof_map.n_equations, model.fixed)
 
