@@ -15,7 +15,7 @@ import math
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -147,6 +147,49 @@ def _external_force_norm(constraints, applied: np.ndarray, internal: np.ndarray)
     return float(np.sqrt(_norm(applied) ** 2 + reactions @ reactions))
 
 
+def _residual(c: Any, load_scale: float, ev: Evaluation, external: np.ndarray
+              ) -> tuple[np.ndarray, float]:
+    """F_ext - F_int on the equations of `c` (no gap forces) and the eq. 4.5 load norm of the
+    unbalance (with them)."""
+    structural = c.restrict(external - ev.internal_force)
+    unbalance = structural - c.restrict(c.constraint_force())
+    # eq. 4.5. The reference R is the external force system: applied loads and support
+    # reactions (the load reaches the supports through the structure), and never less than
+    # the largest reached, so the norm stays meaningful far down the descending branch.
+    scale = max(_external_force_norm(c, external, ev.internal_force), load_scale, 1e-30)
+    return structural, _norm(unbalance) / scale
+
+
+def _converged(settings: SolverSettings, iteration: int, disp_norm: float, load_norm: float,
+               flips: int) -> bool:
+    """Eqs. 4.4 and 4.5 met, no gap flipped. The predictor is not a correction: after it only
+    the load norm is judged, 100 times tighter (a linear problem converges in one iteration)."""
+    displacement_ok = disp_norm <= settings.tolerance_displacement or (
+        iteration == 2 and load_norm <= 0.01 * settings.tolerance_load)
+    return (iteration > 1 and displacement_ok and load_norm <= settings.tolerance_load
+            and flips == 0)
+
+
+def _correction(problem: Problem, factor: Any, structural: np.ndarray, u: np.ndarray,
+                target_deflection: float | None) -> tuple[np.ndarray, np.ndarray, float]:
+    """(du, dm, dP), the corrections of u, the multipliers and P: solved for the unbalance (3.45)
+    and, under displacement control, for R* (3.46) too, combined by eq. 3.48."""
+    c = problem.constraints
+    rhs_unbalance = c.unbalance_rhs(structural, u)
+    if target_deflection is None:
+        du, dm = c.split(factor.solve(rhs_unbalance))
+        return du, dm, 0.0
+    solution = factor.solve(np.column_stack([c.reference_rhs(problem.reference_load),
+                                             rhs_unbalance]))
+    (q1, q2), (m1, m2) = (c.split(solution)[0].T, c.split(solution)[1].T)
+    control_1 = -q1[problem.control_equation]
+    if not abs(control_1) > 0.0 or not math.isfinite(control_1):
+        raise StepFailed("the reference load no longer moves the control point", "snap-back")
+    remaining = target_deflection + u[problem.control_equation]  # = target - deflection
+    dP = (remaining + q2[problem.control_equation]) / control_1  # eq. 3.48
+    return dP * q1 + q2, dP * m1 + m2, dP
+
+
 def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
              target_deflection: float | None, preload_factor: float,
              damp_cycles: bool = True) -> Increment:
@@ -173,44 +216,17 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
         frozen, flags_before = _chatter(problem, settings, ev.states, flags_before, changes,
                                         forensics)
         external = P * R + c.restrict(F_pre)
-        structural = c.restrict(external - ev.internal_force)  # F_ext - F_int, no gap forces
-        unbalance = structural - c.restrict(c.constraint_force())
-        # eq. 4.5. The reference R is the external force system: applied loads and support
-        # reactions (the load reaches the supports through the structure), and never less than
-        # the largest reached, so the norm stays meaningful far down the descending branch.
-        scale = max(_external_force_norm(c, external, ev.internal_force), start.load_scale,
-                    1e-30)
-        load_norm = _norm(unbalance) / scale
+        structural, load_norm = _residual(c, start.load_scale, ev, external)
         log.debug("iteration %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
                   "gap flips %d, Gauss-point flag changes %d", iteration, disp_norm, load_norm,
                   P, flips, forensics["gauss_flag_changes"][-1])
-        # The predictor is not a correction: after it only the load norm can be judged, so it
-        # must be met 100 times tighter (a linear problem then converges in one iteration).
-        displacement_ok = disp_norm <= settings.tolerance_displacement or (
-            iteration == 2 and load_norm <= 0.01 * settings.tolerance_load)
-        if (iteration > 1 and displacement_ok and load_norm <= settings.tolerance_load
-                and flips == 0):
+        if _converged(settings, iteration, disp_norm, load_norm, flips):
             return Increment("control" if target_deflection is not None else "preload",
                              -float(u[problem.control_equation]), P, preload_factor,
                              iteration - 1, disp_norm, load_norm, ev, u, forensics)
         if factor is None or settings.stiffness_update == "every_iteration" or flips:
             factor = c.factorize(s.stiffness(ev))
-        rhs_unbalance = c.unbalance_rhs(structural, u)
-        if target_deflection is None:
-            du, dm = c.split(factor.solve(rhs_unbalance))
-            dP = 0.0
-        else:
-            solution = factor.solve(np.column_stack([c.reference_rhs(problem.reference_load),
-                                                     rhs_unbalance]))
-            (q1, q2), (m1, m2) = (c.split(solution)[0].T, c.split(solution)[1].T)
-            control_1 = -q1[problem.control_equation]
-            if not abs(control_1) > 0.0 or not math.isfinite(control_1):
-                raise StepFailed("the reference load no longer moves the control point",
-                                 "snap-back")
-            remaining = target_deflection + u[problem.control_equation]  # = target - deflection
-            dP = (remaining + q2[problem.control_equation]) / control_1  # eq. 3.48
-            du = dP * q1 + q2
-            dm = dP * m1 + m2
+        du, dm, dP = _correction(problem, factor, structural, u, target_deflection)
         if not (np.all(np.isfinite(du)) and math.isfinite(dP)):
             raise StepFailed("non-finite displacement correction", "NaN")
         rises += iteration >= 3 and load_norm > previous_load_norm
@@ -230,6 +246,46 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
                      f"norm {disp_norm:.3g}, load norm {load_norm:.3g})", "non-convergence")
 
 
+class _Attempt(NamedTuple):
+    """_advance's next try: its step size, iteration scheme (index into _schemes), the steps
+    over a stall made so far (settings.max_jumps) and whether this try is one."""
+
+    size: float
+    retry: int = 0
+    jumps: int = 0
+    jumping: bool = False
+
+
+def _after_failure(exc: StepFailed | ConvergenceError, settings: SolverSettings, kind: str,
+                   goal: float, current: float, step_size: float, smallest: float,
+                   attempt: _Attempt) -> _Attempt:
+    """The try after a failed increment to `goal`: on the smallest step each fallback scheme,
+    then a step over the stall (control only), else half the step; ConvergenceError if none."""
+    reason = getattr(exc, "reason", "non-convergence")
+    size, retry, jumps, jumping = attempt
+    if (size <= smallest and reason == "non-convergence"
+            and retry < len(_schemes(settings)) - 1):
+        # the damped relaxation can crawl where another scheme gets through: retry
+        # the smallest step with each fallback (same equilibrium, same tolerances)
+        log.info("%s %.4g: retrying the smallest step with fallback %d", kind, goal, retry + 1)
+        return attempt._replace(retry=retry + 1)
+    if size <= smallest and kind == "control" and jumps < settings.max_jumps:
+        # step over the stall from the last converged state, as a stroke-controlled
+        # test goes on past a local instability (recorded in the history)
+        size = settings.jump_increments * step_size
+        log.info("control %.4g: stepping over the stall to %.4g (jump %d)", goal,
+                 current + size, jumps + 1)
+        return _Attempt(size, 0, jumps + 1, True)
+    if jumping:
+        raise ConvergenceError(f"{exc} at {kind} {goal:.4g}, also when stepping over "
+                               f"the stall ({jumps} jumps)", reason=reason) from None
+    if size <= smallest:
+        raise ConvergenceError(f"{exc} at {kind} {goal:.4g} after "
+                               f"{settings.max_step_cuts} step cuts",
+                               reason=reason) from None
+    return attempt._replace(size=0.5 * size)
+
+
 def _advance(problem: Problem, settings: SolverSettings, state: PathState, target, preload,
              step_size: float, kind: str, resume: tuple = ()
              ) -> Iterator[tuple[Increment, PathState]]:
@@ -238,16 +294,15 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
     smallest = step_size / 2 ** settings.max_step_cuts * (1 + 1e-9)
     current = (-float(state.u[problem.control_equation]) if kind == "control"
                else state.preload_factor)
-    size = step_size
+    attempt = _Attempt(step_size)
     peak_load = state.load_factor
-    jumps, jumping = 0, False  # steps over a stall so far; this attempt is one
     if resume:  # the checkpoint holds the counter too: a resumed run makes no extra jumps
-        current, size, peak_load, jumps = resume[0], resume[1], resume[2], int(resume[3])
-    retry = 0  # fallback iteration schemes tried on the smallest step (FALLBACKS)
+        current, peak_load = resume[0], resume[2]
+        attempt = _Attempt(resume[1], jumps=int(resume[3]))
     while current < target - 1e-12 * max(1.0, abs(target)):
-        goal = min(current + size, target)
+        goal = min(current + attempt.size, target)
         tic = time.perf_counter()
-        scheme, damp_cycles = _schemes(settings)[retry]
+        scheme, damp_cycles = _schemes(settings)[attempt.retry]
         try:
             if kind == "control":
                 inc = _iterate(problem, scheme, state, goal, preload, damp_cycles)
@@ -255,61 +310,40 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
                 inc = _iterate(problem, scheme, state, None, goal, damp_cycles)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
-            reason = getattr(exc, "reason", "non-convergence")
-            if (size <= smallest and reason == "non-convergence"
-                    and retry < len(_schemes(settings)) - 1):
-                # the damped relaxation can crawl where another scheme gets through: retry
-                # the smallest step with each fallback (same equilibrium, same tolerances)
-                retry += 1
-                log.info("%s %.4g: retrying the smallest step with fallback %d", kind, goal,
-                         retry)
-                continue
-            if size <= smallest and kind == "control" and jumps < settings.max_jumps:
-                # step over the stall from the last converged state, as a stroke-controlled
-                # test goes on past a local instability (recorded in the history)
-                jumps, jumping, retry = jumps + 1, True, 0
-                size = settings.jump_increments * step_size
-                log.info("control %.4g: stepping over the stall to %.4g (jump %d)", goal,
-                         current + size, jumps)
-                continue
-            if jumping:
-                raise ConvergenceError(f"{exc} at {kind} {goal:.4g}, also when stepping over "
-                                       f"the stall ({jumps} jumps)", reason=reason) from None
-            if size <= smallest:
-                raise ConvergenceError(f"{exc} at {kind} {goal:.4g} after "
-                                       f"{settings.max_step_cuts} step cuts",
-                                       reason=reason) from None
-            size = 0.5 * size
+            attempt = _after_failure(exc, settings, kind, goal, current, step_size, smallest,
+                                     attempt)
             continue
         snap = kind == "control" and _abrupt_drop(state, inc, peak_load)
-        if snap and not ((size <= smallest or jumping) and settings.on_snap_back == "continue"):
+        if snap and not ((attempt.size <= smallest or attempt.jumping)
+                         and settings.on_snap_back == "continue"):
             c.rollback()
-            if size <= smallest:
+            if attempt.size <= smallest:
                 raise ConvergenceError(
                     f"snap-back at the control point: the load drops from {state.load_factor:.4g}"
                     f" to {inc.load_factor:.4g} within {goal - current:.3g} mm and the drop does "
                     f"not shrink with the step ({settings.max_step_cuts} cuts); displacement "
                     "control cannot follow this branch", reason="snap-back") from None
-            size = 0.5 * size
+            attempt = attempt._replace(size=0.5 * attempt.size)
             continue
         c.commit()
-        retry = 0
-        inc.jumped, jumping = jumping, False
+        inc.jumped = attempt.jumping
         inc.snap_back = bool(snap)  # accepted load drop (on_snap_back: continue)
         if snap:
             log.info("snap-back at %.4g mm accepted: load %.4g -> %.4g", goal,
                      state.load_factor, inc.load_factor)
         peak_load = max(peak_load, inc.load_factor)
-        inc.cuts = round(math.log2(step_size / size))
+        inc.cuts = round(math.log2(step_size / attempt.size))
         inc.wall_time = time.perf_counter() - tic
         applied = c.restrict(inc.load_factor * problem.reference_load + (
             0.0 if problem.preload is None else inc.preload_factor * problem.preload))
         scale = max(state.load_scale, _external_force_norm(c, applied,
                                                            inc.evaluation.internal_force))
         current = goal
-        size = min(step_size, 2.0 * size)  # grow back after a successful cut step
+        # grow back after a successful cut step; the deck's scheme again, no jump under way
+        attempt = _Attempt(min(step_size, 2.0 * attempt.size), jumps=attempt.jumps)
         state = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
-                          inc.preload_factor, scale, (kind, current, size, peak_load, jumps))
+                          inc.preload_factor, scale,
+                          (kind, current, attempt.size, peak_load, attempt.jumps))
         yield inc, state
 
 
