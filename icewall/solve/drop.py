@@ -122,19 +122,13 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
     retried with the dampers at rest on the last converged increment's motion scaled to the
     step (`last_increment`), so that they resist only the departure from it."""
     c = problem.constraints
-    evaluation = (problem.structure.evaluate(state.u, state.states, tangent=True)
-                  if state.evaluation is None else problem.structure.with_tangent(
-                      state.evaluation))
-    diagonal = floored_diagonal(problem.structure.stiffness(evaluation).diagonal())
+    diagonal = _damper_diagonal(problem, state)
     sub, iterations, next_check = state, 0, 0
     reference = float(np.linalg.norm(c.restrict(problem.reference_load)))
     step = abs(control.target - control.measure(state.u))
     origin = state.u.copy()
     moving = _moving_origin(control, state, step, last_increment)  # after a runaway
-    loose = replace(settings, tolerance_load=SUBSTEP_TOLERANCE * settings.tolerance_load,
-                    tolerance_displacement=SUBSTEP_TOLERANCE * settings.tolerance_displacement,
-                    max_iterations=min(settings.max_iterations, SUBSTEP_ITERATIONS))
-    check = replace(settings, max_iterations=min(settings.max_iterations, CHECK_ITERATIONS))
+    loose, check = _drop_settings(settings)
     weakening = False  # retrying a failed sub-step with weaker dampers
     progress = _Progress(state.load_factor)
     static = float("inf")
@@ -147,9 +141,7 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
         try:
             inc = newton_increment(problem, substep_settings(loose, settings, static), sub,
                                    control, preload, dampers=dampers)
-            bound = max(state.load_scale, inverse_step * float(diagonal.sum()) * step)
-            if abs(inc.load_factor) * reference > RUNAWAY * bound:
-                raise StepFailed(f"the load runs away ({inc.load_factor:.4g})", "runaway")
+            _refuse_runaway(inc, dampers, state.load_scale, step, reference)
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
             if (exc.reason == "runaway" and k == 0 and moving is not None
@@ -157,18 +149,7 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
                 origin = moving
                 log.debug("drop sub-step 0 ran away: the dampers follow the last increment")
                 continue
-            if inverse_step >= LARGEST_INVERSE_STEP and not weakening:
-                weakening, inverse_step = True, 4.0 * FIRST_INVERSE_STEP
-            if exc.reason == "runaway":
-                raise StepFailed(f"drop at a fixed deflection: sub-step {k}: {exc}",
-                                 exc.reason) from None
-            if weakening and inverse_step <= SMALLEST_INVERSE_STEP:
-                raise StepFailed(f"drop at a fixed deflection: sub-step {k} failed with 1/dt "
-                                 f"from {FIRST_INVERSE_STEP:.3g} to {LARGEST_INVERSE_STEP:.3g} "
-                                 f"and down to {inverse_step:.3g} ({exc})", exc.reason) from None
-            inverse_step = (0.25 * inverse_step if weakening
-                            else min(4.0 * inverse_step, LARGEST_INVERSE_STEP))
-            log.debug("drop sub-step %d failed (%s): 1/dt %.3g", k, exc, inverse_step)
+            inverse_step, weakening = _after_failed_substep(exc, k, inverse_step, weakening)
             continue
         c.commit()
         weakening = False
@@ -188,19 +169,82 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
             return _ended(inc, iterations, k, state), inverse_step
         if static <= CHECK_AT * settings.tolerance_load and k >= next_check:
             next_check = k + CHECK_EVERY
-            try:
-                final = newton_increment(problem, check, sub, control, preload)
-            except (StepFailed, ConvergenceError) as exc:
-                c.rollback()
-                log.debug("drop: static step at sub-step %d failed (%s)", k, exc)
-            else:
+            final = _static_step(problem, check, sub, control, preload, k)
+            if final is not None:
                 return _ended(final, iterations + final.iterations, k, state), inverse_step
-        if inc.iterations <= FAST:
-            inverse_step = max(0.5 * inverse_step, SMALLEST_INVERSE_STEP)
-        elif inc.iterations > SLOW:
-            inverse_step = min(2.0 * inverse_step, LARGEST_INVERSE_STEP)
+        inverse_step = _adapted_inverse_step(inverse_step, inc.iterations)
     raise StepFailed(f"drop at a fixed deflection: no equilibrium after {SUBSTEPS} sub-steps",
                      "non-convergence")
+
+
+def _drop_settings(settings: SolverSettings) -> tuple[SolverSettings, SolverSettings]:
+    """The sub-steps' settings before substep_settings (SUBSTEP_TOLERANCE times the deck's
+    tolerances, at most SUBSTEP_ITERATIONS) and the static Newton step's (CHECK_ITERATIONS)."""
+    loose = replace(settings, tolerance_load=SUBSTEP_TOLERANCE * settings.tolerance_load,
+                    tolerance_displacement=SUBSTEP_TOLERANCE * settings.tolerance_displacement,
+                    max_iterations=min(settings.max_iterations, SUBSTEP_ITERATIONS))
+    check = replace(settings, max_iterations=min(settings.max_iterations, CHECK_ITERATIONS))
+    return loose, check
+
+
+def _damper_diagonal(problem: Problem, state: PathState) -> np.ndarray:
+    """D: the floored diagonal of the tangent at the drop's start (floored_diagonal)."""
+    evaluation = (problem.structure.evaluate(state.u, state.states, tangent=True)
+                  if state.evaluation is None else problem.structure.with_tangent(
+                      state.evaluation))
+    return floored_diagonal(problem.structure.stiffness(evaluation).diagonal())
+
+
+def _refuse_runaway(inc: Increment, dampers: Dampers, load_scale: float, step: float,
+                    reference: float) -> None:
+    """StepFailed ("runaway") where the sub-step's jack loads (its load factor times
+    `reference`, the norm of the reference load) exceed RUNAWAY times the larger of
+    `load_scale` and the dampers' force when the whole wall moves by the deflection `step`."""
+    bound = max(load_scale, dampers.inverse_step * float(dampers.diagonal.sum()) * step)
+    if abs(inc.load_factor) * reference > RUNAWAY * bound:
+        raise StepFailed(f"the load runs away ({inc.load_factor:.4g})", "runaway")
+
+
+def _after_failed_substep(exc: StepFailed | ConvergenceError, k: int, inverse_step: float,
+                          weakening: bool) -> tuple[float, bool]:
+    """(1/dt, weakening) to retry failed sub-step `k` with: stiffer dampers up to
+    LARGEST_INVERSE_STEP, then 4x weaker ones from FIRST_INVERSE_STEP / 4; StepFailed for a
+    runaway or where the weakest dampers (SMALLEST_INVERSE_STEP) failed too."""
+    if inverse_step >= LARGEST_INVERSE_STEP and not weakening:
+        weakening, inverse_step = True, 4.0 * FIRST_INVERSE_STEP
+    if exc.reason == "runaway":
+        raise StepFailed(f"drop at a fixed deflection: sub-step {k}: {exc}",
+                         exc.reason) from None
+    if weakening and inverse_step <= SMALLEST_INVERSE_STEP:
+        raise StepFailed(f"drop at a fixed deflection: sub-step {k} failed with 1/dt "
+                         f"from {FIRST_INVERSE_STEP:.3g} to {LARGEST_INVERSE_STEP:.3g} "
+                         f"and down to {inverse_step:.3g} ({exc})", exc.reason) from None
+    inverse_step = (0.25 * inverse_step if weakening
+                    else min(4.0 * inverse_step, LARGEST_INVERSE_STEP))
+    log.debug("drop sub-step %d failed (%s): 1/dt %.3g", k, exc, inverse_step)
+    return inverse_step, weakening
+
+
+def _static_step(problem: Problem, check: SolverSettings, sub: PathState, control,
+                 preload: float, k: int) -> Increment | None:
+    """The static Newton step from sub-step `k` (at most CHECK_ITERATIONS), or None (rolled
+    back) where it does not converge."""
+    try:
+        return newton_increment(problem, check, sub, control, preload)
+    except (StepFailed, ConvergenceError) as exc:
+        problem.constraints.rollback()
+        log.debug("drop: static step at sub-step %d failed (%s)", k, exc)
+        return None
+
+
+def _adapted_inverse_step(inverse_step: float, iterations: int) -> float:
+    """1/dt after a sub-step converged in `iterations`: halved after a quick one (FAST, not
+    below SMALLEST_INVERSE_STEP), doubled after a slow one (SLOW, up to LARGEST_INVERSE_STEP)."""
+    if iterations <= FAST:
+        return max(0.5 * inverse_step, SMALLEST_INVERSE_STEP)
+    if iterations > SLOW:
+        return min(2.0 * inverse_step, LARGEST_INVERSE_STEP)
+    return inverse_step
 
 
 def substep_settings(loose: SolverSettings, settings: SolverSettings, static: float
