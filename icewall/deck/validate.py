@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from icewall.deck.resources import refusals
-from icewall.deck.schema import FIXED_POINT_PLACEMENTS, Deck
+from icewall.deck.schema import FIXED_POINT_PLACEMENTS, Deck, Geometry
 
 ErrorFactory = Callable[[str, str], Exception]
 
@@ -30,24 +30,60 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
     """Raise fail(message, key_path) for the first impossible combination found."""
     geo, loads, analysis = deck.geometry, deck.loads, deck.analysis
     _check_name(deck.specimen.name, fail)
-    half = geo.half_length
-    inner = half - geo.end_plate
+    _check_section(geo, fail)
+    _check_diaphragms(geo, fail)
+    _check_supports(geo, fail)
+    _check_patches(deck, fail)
+    if loads.control.x > geo.half_length:
+        raise fail(f"control point x = {loads.control.x:g} mm is off the wall", "loads.control.x")
+    if loads.control.increment > loads.control.target:
+        raise fail("increment is larger than the target", "loads.control.increment")
+    _check_preload(deck, fail)
+    if loads.measure.kind == "intensity" and loads.measure.tributary_length is None:
+        raise fail("kind 'intensity' needs tributary_length (the jack spacing)",
+                   "loads.measure.tributary_length")
+    if analysis.formulation == "axisymmetric" and geo.model == "full":
+        raise fail("an axisymmetric model is a half model (x = radius >= 0)", "geometry.model")
+    # (in a plane-stress analysis plane-stress plates are what "same" gives: consistent)
+    if (deck.materials.steel.formulation == "plane_stress"
+            and analysis.formulation == "axisymmetric"):
+        raise fail("plane-stress plates are an option of plane-strain (or plane-stress) "
+                   "analyses only", "materials.steel.formulation")
+    _check_fixed_points(deck, fail)
+    _check_mesh_size(deck, fail)
+    if len(set(deck.outputs.fields)) != len(deck.outputs.fields):
+        raise fail("a field is listed twice", "outputs.fields")
+
+
+def _check_section(geo: Geometry, fail: ErrorFactory) -> None:
+    """The plates leave a core, the end plate is shorter than the half wall."""
     if geo.top_plate + geo.bottom_plate >= geo.depth:
         raise fail(f"plates ({geo.top_plate:g} + {geo.bottom_plate:g} mm) are as thick as or "
                    f"thicker than the depth {geo.depth:g} mm", "geometry.top_plate")
-    if geo.end_plate >= half:
-        raise fail(f"end plate {geo.end_plate:g} mm is as long as the half wall {half:g} mm",
-                   "geometry.end_plate")
-    if geo.diaphragms is not None:
-        spans = []
-        t = geo.diaphragms.thickness
-        for i, x in enumerate(geo.diaphragms.positions):
-            key = f"geometry.diaphragms.positions[{i}]"
-            if x + 0.5 * t > inner + 1e-9:
-                raise fail(f"diaphragm at x = {x:g} mm lies outside the wall (its outer face "
-                           f"{x + 0.5 * t:g} mm > {inner:g} mm, the inside of the end)", key)
-            spans += _mirrored(x, 0.5 * t, key)
-        _spans_overlap(spans, "diaphragms", fail)
+    if geo.end_plate >= geo.half_length:
+        raise fail(f"end plate {geo.end_plate:g} mm is as long as the half wall "
+                   f"{geo.half_length:g} mm", "geometry.end_plate")
+
+
+def _check_diaphragms(geo: Geometry, fail: ErrorFactory) -> None:
+    """Diaphragms lie inside the end plates and do not overlap (nor their mirror images)."""
+    if geo.diaphragms is None:
+        return
+    inner = geo.half_length - geo.end_plate
+    spans = []
+    t = geo.diaphragms.thickness
+    for i, x in enumerate(geo.diaphragms.positions):
+        key = f"geometry.diaphragms.positions[{i}]"
+        if x + 0.5 * t > inner + 1e-9:
+            raise fail(f"diaphragm at x = {x:g} mm lies outside the wall (its outer face "
+                       f"{x + 0.5 * t:g} mm > {inner:g} mm, the inside of the end)", key)
+        spans += _mirrored(x, 0.5 * t, key)
+    _spans_overlap(spans, "diaphragms", fail)
+
+
+def _check_supports(geo: Geometry, fail: ErrorFactory) -> None:
+    """Supports and their bearing plates, and legs, on the wall and apart; a full model pinned."""
+    half = geo.half_length
     if not geo.supports:
         raise fail("at least one support is required", "geometry.supports")
     plates = []
@@ -76,11 +112,15 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
     if geo.model == "full" and not any(s.restraint == "pin" for s in geo.supports):
         raise fail("a full model needs at least one 'pin' support to stop horizontal "
                    "rigid-body motion", "geometry.supports")
-    patches = []
-    width = loads.patches.width
-    if not loads.patches.positions:
+
+
+def _check_patches(deck: Deck, fail: ErrorFactory) -> None:
+    """At least one load patch, each on the top plate, none overlapping another."""
+    half, patches = deck.geometry.half_length, []
+    width = deck.loads.patches.width
+    if not deck.loads.patches.positions:
         raise fail("at least one load patch is required", "loads.patches.positions")
-    for i, x in enumerate(loads.patches.positions):
+    for i, x in enumerate(deck.loads.patches.positions):
         key = f"loads.patches.positions[{i}]"
         # (a patch flush with the wall end stays valid when a round-off realization widens
         # it by k 1e-8: the mesh clips it to the end, icewall.mesh.layout)
@@ -89,25 +129,6 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
                        f"(half length {half:g} mm)", key)
         patches += _mirrored(x, 0.5 * width, key)
     _spans_overlap(patches, "load patches", fail)
-    if loads.control.x > half:
-        raise fail(f"control point x = {loads.control.x:g} mm is off the wall", "loads.control.x")
-    if loads.control.increment > loads.control.target:
-        raise fail("increment is larger than the target", "loads.control.increment")
-    _check_preload(deck, fail)
-    if loads.measure.kind == "intensity" and loads.measure.tributary_length is None:
-        raise fail("kind 'intensity' needs tributary_length (the jack spacing)",
-                   "loads.measure.tributary_length")
-    if analysis.formulation == "axisymmetric" and geo.model == "full":
-        raise fail("an axisymmetric model is a half model (x = radius >= 0)", "geometry.model")
-    # (in a plane-stress analysis plane-stress plates are what "same" gives: consistent)
-    if (deck.materials.steel.formulation == "plane_stress"
-            and analysis.formulation == "axisymmetric"):
-        raise fail("plane-stress plates are an option of plane-strain (or plane-stress) "
-                   "analyses only", "materials.steel.formulation")
-    _check_fixed_points(deck, fail)
-    _check_mesh_size(deck, fail)
-    if len(set(deck.outputs.fields)) != len(deck.outputs.fields):
-        raise fail("a field is listed twice", "outputs.fields")
 
 
 def _check_mesh_size(deck: Deck, fail: ErrorFactory) -> None:
