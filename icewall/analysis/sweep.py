@@ -32,7 +32,21 @@ from pathlib import Path
 import yaml
 
 from icewall.analysis.sweep_runners import Job, run_dask, run_local
+from icewall.analysis.sweep_table import (
+    BAND_COLUMNS,
+    band_rows,
+    build_rows,
+    format_bands,
+    format_table,
+    ratio_stats,
+    write_csv,
+)
+from icewall.deck.load import load_deck
+from icewall.deck.resources import MAX_RUNS
+from icewall.deck.yamlsrc import load_yaml
 from icewall.errors import DeckError, Interrupted, ResultError
+from icewall.pipeline import run_stamp
+from icewall.results.reader import open_result
 
 FINISHED = ("completed", "stopped")
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
@@ -75,8 +89,6 @@ def _yaml_text(value) -> str:
 
 
 def _read_sweep_file(path: str | Path) -> tuple[list[str], dict, dict]:
-    from icewall.deck.yamlsrc import load_yaml
-
     try:
         text = Path(path).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
@@ -151,8 +163,6 @@ def expand_jobs(decks: Iterable[str | Path] = (), sets: Iterable[str] = (),
 def check_run_count(n_runs: int, fixed: dict, where: str) -> None:
     """Refuse more than resources.MAX_RUNS runs up front (before any job is listed) unless
     the sweep fixes analysis.allow_large to true."""
-    from icewall.deck.resources import MAX_RUNS
-
     allowed = str(fixed.get("analysis.allow_large", "false")).strip().lower() == "true"
     if n_runs > MAX_RUNS and not allowed:
         raise DeckError(f"{n_runs:.3g} runs (limit {MAX_RUNS:.0e}): the sweep would not finish; "
@@ -183,8 +193,6 @@ def with_realizations(jobs: list[Job], realizations: int) -> list[Job]:
         return list(jobs)
     fixed = dict(o.split("=", 1) for job in jobs[:1] for o in job.overrides if "=" in o)
     check_run_count(len(jobs) * realizations, fixed, "icewall sweep --realizations")
-    from icewall.deck.load import load_deck
-
     out = []
     for job in jobs:
         out.append(job)
@@ -200,9 +208,6 @@ def with_realizations(jobs: list[Job], realizations: int) -> list[Job]:
 def reuse_verdict(job: Job) -> tuple[str | None, str]:
     """(status, "") of an earlier run of `job` that can be skipped (completed/stopped), else
     (None, why it is rerun; "" where there is no result). Same run: same `run_stamp`."""
-    from icewall.pipeline import run_stamp
-    from icewall.results.reader import open_result
-
     if not os.path.lexists(job.output):
         return None, ""
     try:
@@ -234,8 +239,6 @@ def validate_jobs(jobs: Iterable[Job]) -> None:
     """Load and validate the deck of every job with its overrides (`--dry-run`): a bad value
     in one run is a DeckError (exit 2) naming that run. A real sweep does not stop for it:
     that run fails with the same message and the others go on."""
-    from icewall.deck.load import load_deck
-
     for job in jobs:
         try:
             load_deck(job.deck, job.overrides)
@@ -257,16 +260,6 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
     before any run. With K > 1 every run has K - 1 round-off realizations beside it
     (with_realizations) and OUTDIR/sweep_realizations.csv gives the band each figure spans.
     """
-    from icewall.analysis.sweep_table import (
-        BAND_COLUMNS,
-        band_rows,
-        build_rows,
-        format_bands,
-        format_table,
-        ratio_stats,
-        write_csv,
-    )
-
     if echo is None:
         import click
 
@@ -279,18 +272,8 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
         validate_jobs(jobs)
         return 0
     make_output_directory(outdir)
-    results: dict[str, dict] = {}
-    todo = []
     width = max(len(job.name) for job in jobs)
-    for job in jobs:
-        status, why = (None, "") if force else reuse_verdict(job)
-        if status is None:
-            todo.append(job)
-            if why:
-                say(f"{job.name}: rerun: {why}")
-            continue
-        results[job.name] = {"name": job.name, "path": job.output, "status": status}
-        say(f"[{len(results)}/{len(jobs)}] {job.name:<{width}}  skipped ({status} earlier)")
+    results, todo = _skip_finished(jobs, force, width, say)
 
     def done(result: dict) -> None:
         results[result["name"]] = result
@@ -312,6 +295,35 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
         write_csv(table, rows, ratio_stats(rows))
         echo(f"interrupted: {len(finished)} of {len(jobs)} runs in the table {table}")
         raise
+    rows, table = _write_tables(jobs, results, outdir, realizations, echo)
+    say(f"{len(todo)} run(s) in {time.perf_counter() - start:.1f} s, "
+        f"{len(jobs) - len(todo)} skipped; table: {table}")
+    return 0 if all(r["status"] == "completed" for r in rows) else 1
+
+
+def _skip_finished(jobs: list[Job], force: bool, width: int, say: Callable[[str], None]
+                   ) -> tuple[dict[str, dict], list[Job]]:
+    """The results of the jobs an earlier run finished (reuse_verdict; none with `force`),
+    each reported as skipped, and the jobs to run (with why, where an earlier result is not
+    reused)."""
+    results: dict[str, dict] = {}
+    todo = []
+    for job in jobs:
+        status, why = (None, "") if force else reuse_verdict(job)
+        if status is None:
+            todo.append(job)
+            if why:
+                say(f"{job.name}: rerun: {why}")
+            continue
+        results[job.name] = {"name": job.name, "path": job.output, "status": status}
+        say(f"[{len(results)}/{len(jobs)}] {job.name:<{width}}  skipped ({status} earlier)")
+    return results, todo
+
+
+def _write_tables(jobs: list[Job], results: dict[str, dict], outdir: str, realizations: int,
+                  echo: Callable[[str], None]) -> tuple[list[dict], str]:
+    """Write and echo OUTDIR/sweep_summary.csv and, with realizations, the bands of
+    OUTDIR/sweep_realizations.csv; return the summary's rows and its path."""
     rows = build_rows(jobs, results)
     stats = ratio_stats(rows)
     table = os.path.join(outdir, "sweep_summary.csv")
@@ -323,9 +335,7 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
         write_csv(os.path.join(outdir, "sweep_realizations.csv"), bands, band_stats,
                   BAND_COLUMNS)
         echo(format_bands(bands, band_stats))
-    say(f"{len(todo)} run(s) in {time.perf_counter() - start:.1f} s, "
-        f"{len(jobs) - len(todo)} skipped; table: {table}")
-    return 0 if all(r["status"] == "completed" for r in rows) else 1
+    return rows, table
 
 
 def make_output_directory(outdir: str | os.PathLike) -> None:
