@@ -103,6 +103,17 @@ def shear_modulus(E1: Any, E2: Any, nu0: float) -> Any:
     return np.minimum(E1, E2) / (2.0 * (1.0 + nu0))
 
 
+def coaxial_shear_modulus(s_xx: Any, s_yy: Any, s_xy: Any, e_xx: Any, e_yy: Any, g_xy: Any,
+                          committed: Any) -> Any:
+    """G12 = (sigma_1 - sigma_2) / (2 (eps_1 - eps_2)) (errata §3), the shear stiffness that
+    keeps stress and strain co-axial, from the global components (engineering shear strain);
+    `committed` where the strain circle has no radius (1e-12)."""
+    turn = (s_xx - s_yy) * (e_xx - e_yy) + s_xy * g_xy
+    strain_radius = np.hypot(e_xx - e_yy, g_xy)
+    G = np.sign(turn) * np.hypot(s_xx - s_yy, 2.0 * s_xy) / (2.0 * strain_radius)
+    return select(strain_radius > 1e-12, G, committed)
+
+
 # --- §3.2.3: equivalent-uniaxial curves, Poisson ratios -----------------------------------
 
 def saenz_secant(strain: Any, E0: Any, peak_stress: Any, peak_strain: Any) -> Any:

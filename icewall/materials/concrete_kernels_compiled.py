@@ -331,10 +331,7 @@ def floored_moduli_points(secant, poisson, shear, stress, strain, angle, E0, nu0
         G = shear[i]
         if coaxial:  # errata §3: the G12 that keeps stress and strain co-axial
             s, e = stress[i], strain[i]
-            turn = (s[0] - s[1]) * (e[0] - e[1]) + s[3] * e[3]
-            strain_radius = math.hypot(e[0] - e[1], e[3])
-            if strain_radius > 1e-12:
-                G = np.sign(turn) * math.hypot(s[0] - s[1], 2.0 * s[3]) / (2.0 * strain_radius)
+            G = law.coaxial_shear_modulus(s[0], s[1], s[3], e[0], e[1], e[3], G)
         G = law.clip(G, floor * G0, G0)
         c, sn = math.cos(angle[i]), math.sin(angle[i])
         cc, ss, cs = c * c, sn * sn, c * sn

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from icewall.materials import concrete_formulas as formulas
 from icewall.materials.concrete import matrix_secant
 from icewall.materials.concrete_compiled import compiled_floored_moduli, compiled_substepped
 from icewall.materials.concrete_state import ConcreteState
@@ -116,12 +117,9 @@ def coaxial_shear_modulus(state: Any) -> np.ndarray:
     """G = (sigma_1 - sigma_2) / (2 (eps_1 - eps_2)) (errata §3): the shear stiffness that keeps
     stress and strain co-axial, i.e. the one the rotating-crack stress update really has."""
     s, e = state.stress, state.strain
-    sign = np.sign((s[:, 0] - s[:, 1]) * (e[:, 0] - e[:, 1]) + s[:, 3] * e[:, 3])
-    stress_radius = np.hypot(s[:, 0] - s[:, 1], 2.0 * s[:, 3])
-    strain_radius = np.hypot(e[:, 0] - e[:, 1], e[:, 3])
     with np.errstate(divide="ignore", invalid="ignore"):
-        G = sign * stress_radius / (2.0 * strain_radius)
-    return np.where(strain_radius > 1e-12, G, state.shear_modulus)
+        return formulas.coaxial_shear_modulus(s[:, 0], s[:, 1], s[:, 3], e[:, 0], e[:, 1],
+                                              e[:, 3], state.shear_modulus)
 
 
 def floored_moduli(state: Any, params: Any, formulation: str, floor: float,

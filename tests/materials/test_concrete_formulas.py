@@ -13,7 +13,8 @@ import pytest
 from icewall.materials import concrete_formulas
 
 MATERIALS = Path(concrete_formulas.__file__).parent
-NUMPY_MODULES = ("concrete", "mode_rules", "orthotropic", "ultimate_surface", "uniaxial")
+NUMPY_MODULES = ("concrete", "concrete_law", "mode_rules", "orthotropic", "ultimate_surface",
+                 "uniaxial")
 KERNELS = "concrete_kernels_compiled"
 
 
