@@ -47,6 +47,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from icewall.results.probe import TENSION_PLATE
 from icewall.results.reader import open_result
 
 RESIDUAL_DEFLECTION = 40.0  # mm
@@ -54,7 +55,6 @@ PLATEAU_OFFSET = 10.0  # mm past the peak
 PLATEAU_START_MIN = 20.0  # mm
 STIFFNESS_FRACTION = 0.30
 FIRST_PEAK_SOFTENING = 0.05  # fraction of the running maximum the curve falls by after it
-TENSION_PLATE = "bottom_plate"
 _EPS = 1e-9
 
 

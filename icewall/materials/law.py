@@ -9,6 +9,7 @@ has no chatter flags, no counts, no state fields, and its whole strain is elasti
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
 import numpy as np
@@ -16,7 +17,7 @@ import numpy as np
 Update = tuple[np.ndarray, np.ndarray, Any]  # stress (n, 4), moduli (n, 4, 4), trial state
 
 
-class MaterialLaw:
+class MaterialLaw(ABC):
     """A constitutive law with its parameters (subclasses are frozen dataclasses)."""
 
     # update(frozen=) is honoured: frozen points may only unload or reload (chatter damping)
@@ -36,12 +37,12 @@ class MaterialLaw:
         """The virgin state of n points (None for a law without state)."""
         return None
 
+    @abstractmethod
     def update(self, strain: np.ndarray, state: Any, frozen: np.ndarray | None = None,
                returned_secant: bool = False, tangent: bool = False) -> Update:
         """Stress, moduli and trial state at `strain` from the committed `state`. `frozen`
         (n,) bool and `returned_secant` are options of a freezable law; `tangent` asks for
         the consistent tangent as moduli (a law with secant moduli)."""
-        raise NotImplementedError
 
     def tangent_of(self, strain: np.ndarray, stress: np.ndarray, trial: Any,
                    state: Any) -> np.ndarray:

@@ -127,3 +127,11 @@ def test_concrete_law_freezes_but_has_no_tangent_at_frozen_points():
     with pytest.raises(ValueError, match="frozen"):
         law.update(np.zeros((1, 4)), law.initial_state(1), frozen=np.ones(1, bool),
                    tangent=True)
+
+
+def test_a_law_without_an_update_cannot_be_made():
+    """`update` is the one method every law must give (MaterialLaw is abstract)."""
+    from icewall.materials.law import MaterialLaw
+
+    with pytest.raises(TypeError, match="update"):
+        MaterialLaw()
