@@ -181,7 +181,7 @@ def _correction(problem: Problem, factor: Any, structural: np.ndarray, u: np.nda
         return du, dm, 0.0
     solution = factor.solve(np.column_stack([c.reference_rhs(problem.reference_load),
                                              rhs_unbalance]))
-    (q1, q2), (m1, m2) = (c.split(solution)[0].T, c.split(solution)[1].T)
+    (q1, q2), (m1, m2) = (part.T for part in c.split(solution))
     control_1 = -q1[problem.control_equation]
     if not abs(control_1) > 0.0 or not math.isfinite(control_1):
         raise StepFailed("the reference load no longer moves the control point", "snap-back")
