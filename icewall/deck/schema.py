@@ -98,6 +98,13 @@ class Surface:
     """Willam-Warnke five-parameter surface control points (errata §2.3, set B)."""
 
     name: str = option("willam-warnke-B", doc="calibration name (see materials docs)")
+    calibration: str = option(
+        "control_points", doc="control_points: r1 through f't, f_cb (biaxial_ratio) and f1, r2 "
+        "through f'c and f2 (errata §2.3; set B by default); A_refit: errata §2.2 set A (Elwi & "
+        "Murray 1979, the thesis 4.3.1's source) through its meridian values at sigma_bar = -1.5 "
+        "and f_cb = 1.21, refitted through f't (biaxial_ratio, f1_ratio, f2_ratio unused); A: set "
+        "A's fixed coefficients (implied f_t = 0.10 f'c, not the f't of the uniaxial curves)",
+        choices=("control_points", "A_refit", "A"))
     biaxial_ratio: float = option(1.20, doc="equal-biaxial strength f_cb / f'c",
                                   exclusive_minimum=1.0)
     f1_ratio: float = option(1.45, doc="biaxial high-compression point f1/f'c on "
@@ -161,6 +168,25 @@ class Concrete:
         "sub-stepped); total = committed secant matrix times the total strain (older default: "
         "not consistent once nu has grown by eq. 3.19, which can let the iteration jump to "
         "spurious all-cracked states)", choices=("corotational", "incremental", "total"))
+    nu_max: float = option(0.49, doc="limit of Poisson's ratio, eqs. 3.19-3.20 (3.2.6: 'the "
+                           "incompressible limit of 0.5 is retained'; default below it, errata "
+                           "§3: at 0.5 eq. 3.3d's phi vanishes in triaxial compression and "
+                           "eq. 3.2 is singular, phi then floored at 1e-3)", minimum=0.25,
+                           maximum=0.5)
+    printed_forms: tuple[str, ...] = option(
+        [], doc="errata §1 corrections replaced by the thesis' printed form (attribution runs, "
+        "docs/thesis_reproduction.md): eq3.11a (tension branch decays from the compressive "
+        "peak strain eps_c, a plateau at f't up to it), eq3.13 (printed Lode angle, 60 deg - "
+        "theta: the meridians swapped), eq3.26 (descending area integrated from 0: k solves "
+        "k exp(-k eps_peak) = sigma h_c / G), eq3.34 (k_c without the exponent 1.25), "
+        "fig3.12_step5 (strengths on the ray of the committed stress, not the trial stress); "
+        "the point-update forms run on the NumPy kernel",
+        choices=("eq3.11a", "eq3.13", "eq3.26", "eq3.34", "fig3.12_step5"))
+    compression_branch: str = option(
+        "exponential", doc="descending branch in compression: exponential (eq. 3.11b) or linear "
+        "(Appendix A, Fig. A.5: 'A linear descending branch was used in all analyses'), to zero "
+        "at eps_ic + 2 sigma_ic / k_c, the same area sigma_ic / k_c (NumPy kernel)",
+        choices=("exponential", "linear"))
     substep_ratio: float = option(0.5, doc="largest strain sub-step of the stress update, as a "
                                   "fraction of the cracking strain f't/E (forward-Euler "
                                   "accuracy of Fig. 3.12 over large increments)",

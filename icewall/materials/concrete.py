@@ -86,9 +86,13 @@ def _envelope(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.ndarray,
     tensile = eps_u > 0.0
     peak_stress, peak_magnitude = np.abs(strength), np.abs(peak_strain)
     k_t, k_c = _point_column(params.k_t, rows), _point_column(params.k_c, rows)
-    t_stress, t_secant = tension_envelope(magnitude, params.E0, peak_stress, peak_magnitude, k_t)
-    c_stress, c_secant = compression_envelope(magnitude, params.E0, peak_stress,
-                                              peak_magnitude, k_c)
+    printed = getattr(params, "printed_forms", ())
+    start = params.eps_c if "eq3.11a" in printed else None  # eq. 3.11a as printed
+    t_stress, t_secant = tension_envelope(magnitude, params.E0, peak_stress, peak_magnitude, k_t,
+                                          start)
+    c_stress, c_secant = compression_envelope(
+        magnitude, params.E0, peak_stress, peak_magnitude, k_c,
+        getattr(params, "compression_branch", "exponential") == "linear")
     return np.where(tensile, t_stress, c_stress), np.where(tensile, t_secant, c_secant)
 
 
@@ -195,7 +199,11 @@ def _curve_parameters(trial: np.ndarray, eps_u: np.ndarray, loading: np.ndarray,
     envelope_stress, envelope_secant = np.abs(trial), state.secant_modulus.copy()
     loads = np.nonzero(loading.any(axis=1))[0]
     if loads.size:
-        strength[loads] = equivalent_uniaxial_strengths(trial[loads], params,
+        # Fig. 3.12 step 5: the trial stress (errata 1.3); "fig3.12_step5": as printed, the
+        # stress known before step 6, the committed one in the committed axes
+        on_ray = (local_normal_components(state.stress[loads], state.angle[loads], 2.0)
+                  if "fig3.12_step5" in getattr(params, "printed_forms", ()) else trial[loads])
+        strength[loads] = equivalent_uniaxial_strengths(on_ray, params,
                                                         strain_sign=eps_u[loads])
         peak_strain[loads] = equivalent_uniaxial_peak_strains(strength[loads], params)
         kept = past_peak(eps_u[loads], state.cracked[loads], state.crushed[loads],

@@ -45,7 +45,9 @@ def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParamete
     """
     p = np.atleast_2d(np.asarray(principal, dtype=float))
     fc, ft = params.fc, params.ft
-    s = np.asarray(strength_scale(p, fc, params.surface, max_scale=max_scale))
+    printed_lode = "eq3.13" in getattr(params, "printed_forms", ())
+    s = np.asarray(strength_scale(p, fc, params.surface, max_scale=max_scale,
+                                  printed_lode=printed_lode))
     zero = zero_component(p, np.max(np.abs(p), axis=1, keepdims=True), fc, zero_tol)
     hint = p if strain_sign is None else np.broadcast_to(np.asarray(strain_sign, float), p.shape)
     any_tension = ((p > 0.0) & ~zero).any(axis=1, keepdims=True)

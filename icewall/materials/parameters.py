@@ -91,14 +91,22 @@ class ConcreteParameters:
     # sigma_ic, eps_ic of a direction past its peak: "ray" = read again on the trial stress's
     # ray at every update (errata 1.3, step 5); "peak" = kept from where it passed its peak
     post_peak_strength: str = "ray"
+    # errata §1 corrections replaced by the printed form (deck printed_forms; PRINTED_FORMS)
+    printed_forms: tuple[str, ...] = ()
+    # descending branch in compression: "exponential" (eq. 3.11b) or "linear" (App. A)
+    compression_branch: str = "exponential"
 
     def __post_init__(self) -> None:
         for name in ("fc", "E0", "ft", "eps_c", "eps_t", "Gf", "G_cr", "h_c", "k_t", "k_c"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"concrete parameter {name} must be finite and > 0, got {v}")
-        if not 0.0 <= self.nu0 < self.nu_max < 0.5:
-            raise ValueError(f"need 0 <= nu0 < nu_max < 0.5, got {self.nu0}, {self.nu_max}")
+        if not 0.0 <= self.nu0 < self.nu_max <= 0.5:
+            raise ValueError(f"need 0 <= nu0 < nu_max <= 0.5, got {self.nu0}, {self.nu_max}")
+        if unknown := set(self.printed_forms) - set(PRINTED_FORMS):
+            raise ValueError(f"unknown printed form(s) {sorted(unknown)}")
+        if self.compression_branch not in ("exponential", "linear"):
+            raise ValueError("compression_branch must be 'exponential' or 'linear'")
         if self.peak_strain_slope < 0.0:
             raise ValueError("peak_strain_slope must be >= 0")
         if self.compression_tension_rule not in ("equal", "floor"):
@@ -121,9 +129,28 @@ class ConcreteParameters:
         return self.k_c * self.fc > self.E0
 
 
+PRINTED_FORMS = ("eq3.11a", "eq3.13", "eq3.26", "eq3.34", "fig3.12_step5")
+"""The errata §1 corrections whose printed form can run (deck materials.concrete.printed_forms)."""
+POINT_FORMS = ("eq3.11a", "eq3.13", "fig3.12_step5")
+"""Printed forms of the point update (the NumPy kernel only; the others set k_t, k_c)."""
+
 _DEFAULTS = ("E0", "ft", "eps_c", "eps_t", "nu0", "Gf", "alpha", "G_cr", "k_t", "k_c",
              "nu_max", "surface", "peak_strain_slope", "compression_tension_rule",
-             "mode_rule_band", "post_peak_strength")
+             "mode_rule_band", "post_peak_strength", "printed_forms", "compression_branch")
+
+
+def printed_lower_limit_decay(k: ArrayLike, eps_peak: ArrayLike) -> np.ndarray:
+    """Decay of eq. 3.26 as printed (lower limit 0, errata §1.1): the k with
+    (sigma / k) exp(k eps_peak) = sigma / `k`, i.e. k exp(-k eps_peak) = k_corrected, the root
+    below 1 / eps_peak (fixed point k <- k_corrected exp(k eps_peak), contracting there)."""
+    target = np.asarray(k, dtype=float)
+    eps = np.asarray(eps_peak, dtype=float)
+    if np.any(target * eps >= 1.0 / math.e):
+        raise ValueError("eq. 3.26 as printed has no decay for k eps_peak >= 1/e")
+    out = target.copy()
+    for _ in range(200):
+        out = target * np.exp(out * eps)
+    return out
 _SURFACE_KEYS = ("fcb_ratio", "f1", "f2")
 
 
@@ -159,6 +186,7 @@ def derive_concrete_parameters(fc: float, h_c: float, **overrides: object) -> Co
     else:
         Gf = float(get("Gf", 0.10))
         k_t = ft * h_c / Gf  # eq. 3.29 (from 3.27 corrected: sigma_t / k_t = G_f / h_c)
+    printed = tuple(get("printed_forms", ()))  # type: ignore[arg-type]
     if "k_c" in ov:
         k_c = float(ov["k_c"])  # type: ignore[arg-type]
         G_cr = float(get("G_cr", fc * h_c / k_c))
@@ -167,8 +195,15 @@ def derive_concrete_parameters(fc: float, h_c: float, **overrides: object) -> Co
         k_c = fc * h_c / G_cr  # eq. 3.30
     else:
         G_cr = crushing_energy(fc, alpha, eps_c)  # eqs. 3.31, 3.33
-        # eq. 3.34, corrected per errata §1.1 (exponent 1.25 on the bracket)
-        k_c = h_c / (209.2 * fc**0.25 * (0.015 * alpha - 0.667 * eps_c) ** 1.25)
+        # eq. 3.34, corrected per errata §1.1 (exponent 1.25 on the bracket); "eq3.34": printed
+        power = 1.0 if "eq3.34" in printed else 1.25
+        k_c = h_c / (209.2 * fc**0.25 * (0.015 * alpha - 0.667 * eps_c) ** power)
+        G_cr = fc * h_c / k_c if "eq3.34" in printed else G_cr
+    if "eq3.26" in printed:  # the descending areas integrated from 0 (errata §1.1, eq. 3.26)
+        if "k_t" not in ov:
+            k_t = float(printed_lower_limit_decay(k_t, eps_t))
+        if "k_c" not in ov:
+            k_c = float(printed_lower_limit_decay(k_c, eps_c))
     surface = get("surface")
     if surface is None:
         ctrl = {**SET_B_CONTROL, **{k: ov[k] for k in _SURFACE_KEYS if k in ov}}
@@ -182,5 +217,6 @@ def derive_concrete_parameters(fc: float, h_c: float, **overrides: object) -> Co
         peak_strain_slope=float(get("peak_strain_slope", 3.0)),
         compression_tension_rule=str(get("compression_tension_rule", "equal")),
         mode_rule_band=float(get("mode_rule_band", 0.0)),
-        post_peak_strength=str(get("post_peak_strength", "ray")))
+        post_peak_strength=str(get("post_peak_strength", "ray")), printed_forms=printed,
+        compression_branch=str(get("compression_branch", "exponential")))
 

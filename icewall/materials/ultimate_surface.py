@@ -195,7 +195,8 @@ def _ray_function(t: np.ndarray, sb: np.ndarray, tb: np.ndarray, c: np.ndarray,
 
 def strength_scale(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface,
                    max_scale: float = MAX_SCALE, iterations: int = NEWTON_ITERATIONS, *,
-                   return_capped: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                   return_capped: bool = False, printed_lode: bool = False
+                   ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """s > 0 with f(s sigma) = 0 on the proportional ray (vectorised safeguarded Newton).
 
     ``max_scale`` caps the strength point: max_i |s sigma_i| <= max_scale f'c. Rays that do not
@@ -215,10 +216,14 @@ def strength_scale(principal: ArrayLike, fc: float, surface: WillamWarnkeSurface
     r1, other calibrations) still converge. A ray stops at a Newton step below 1e-12 t (its
     error is then ~1e-24 t, i.e. round-off) or a bracket that narrow; ``iterations`` bounds
     the steps (each at worst a bisection; the bracket midpoint is returned after the last).
+    ``printed_lode``: theta of eq. 3.13 as printed, 60 deg - theta (errata §1.1).
     """
     p = _sorted(principal) / fc
     sb, tb, mag, x, y, defined = unit_ray(p[:, 0], p[:, 1], p[:, 2])
-    c = np.cos(formulas.lode_angle(np.arctan2(y, x), defined))
+    theta = formulas.lode_angle(np.arctan2(y, x), defined)
+    # ``printed_lode``: eq. 3.13 as printed gives 60 deg - theta (errata §1.1: the meridians
+    # swapped); theta is constant on a ray, so only cos theta changes
+    c = np.cos(np.pi / 3.0 - theta if printed_lode else theta)
     cap = float(max_scale)
     meets = _ray_function(np.full_like(mag, cap), sb, tb, c, surface, slope=False)[0] >= 0.0
     t_out = np.full_like(mag, cap)

@@ -81,30 +81,40 @@ def softening_energy(peak_stress: ArrayLike, decay: ArrayLike) -> np.ndarray:
 
 
 def _envelope(strain: ArrayLike, E0: ArrayLike, peak_stress: ArrayLike, peak_strain: ArrayLike,
-              decay: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+              decay: ArrayLike, decay_start: ArrayLike | None = None, linear: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
     eps, eps_p = _mag(strain), np.asarray(peak_strain, dtype=float)
+    start = eps_p if decay_start is None else np.maximum(np.asarray(decay_start, float), eps_p)
     with np.errstate(over="ignore"):
-        decayed = np.exp(-decay_exponent(eps, eps_p, np.asarray(decay, dtype=float)))
+        exponent = decay_exponent(eps, start, np.asarray(decay, dtype=float))
+        # linear (App. A, Fig. A.5): 1 - k (eps - eps_p) / 2, zero at eps_p + 2 / k: the same
+        # area sigma / k as the exponential branch (eqs. 3.26-3.27 corrected)
+        decayed = np.maximum(1.0 - 0.5 * exponent, 0.0) if linear else np.exp(-exponent)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # clipped below
         return formulas.envelope(eps, np.asarray(peak_stress, dtype=float), eps_p,
                                  np.asarray(E0, dtype=float), decayed, SECANT_FLOOR)
 
 
 def compression_envelope(strain: ArrayLike, E0: ArrayLike, peak_stress: ArrayLike,
-                         peak_strain: ArrayLike, decay: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Monotone compression envelope (magnitudes): capped Saenz to the peak, then eq. 3.11b.
+                         peak_strain: ArrayLike, decay: ArrayLike, linear: bool = False
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Monotone compression envelope (magnitudes): capped Saenz to the peak, then eq. 3.11b
+    (``linear``: the straight branch of App. A, Fig. A.5, of the same area).
 
     Returns ``(stress, secant)``; secant = stress/strain, E0 at strain 0, clipped into
     [SECANT_FLOOR * E0, E0] so it is always positive and finite (never NaN, for any strain >= 0).
     """
-    return _envelope(strain, E0, peak_stress, peak_strain, decay)
+    return _envelope(strain, E0, peak_stress, peak_strain, decay, linear=linear)
 
 
 def tension_envelope(strain: ArrayLike, E0: ArrayLike, peak_stress: ArrayLike,
-                     peak_strain: ArrayLike, decay: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+                     peak_strain: ArrayLike, decay: ArrayLike,
+                     decay_start: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Monotone tension envelope (magnitudes); same form as :func:`compression_envelope`.
 
     With ``peak_strain = peak_stress / E0`` (the default eps_t) the ascending branch is linear
     (errata §3, "Tension peak strain is undefined"); descending branch eq. 3.11a corrected.
+    ``decay_start``: eq. 3.11a as printed, the decay measured from eps_c (errata §1.1), the
+    stress held at the peak up to it.
     """
-    return _envelope(strain, E0, peak_stress, peak_strain, decay)
+    return _envelope(strain, E0, peak_stress, peak_strain, decay, decay_start)

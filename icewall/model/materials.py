@@ -4,6 +4,7 @@ what parameters; the deck's material models are mapped to law objects here, once
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields, make_dataclass
 from typing import Any
 
@@ -15,9 +16,18 @@ from icewall.materials.concrete_compiled import choose_kernel
 from icewall.materials.concrete_law import ConcreteLaw
 from icewall.materials.elastic import ElasticLaw, elastic_moduli
 from icewall.materials.law import MaterialLaw
-from icewall.materials.parameters import ConcreteParameters, derive_concrete_parameters
+from icewall.materials.parameters import (
+    POINT_FORMS,
+    ConcreteParameters,
+    derive_concrete_parameters,
+    printed_lower_limit_decay,
+)
 from icewall.materials.steel import SteelLaw, steel_parameters
-from icewall.materials.ultimate_surface import hydrostatic_points
+from icewall.materials.ultimate_surface import (
+    SET_A_ELWI_MURRAY,
+    elwi_murray_refit,
+    hydrostatic_points,
+)
 from icewall.model.description import MATERIAL_KEYS, ModelDescription
 
 
@@ -45,9 +55,15 @@ def concrete_point_parameters(params: ConcreteParameters, h_c: np.ndarray,
     values = {f.name: getattr(params, f.name) for f in fields(ConcreteParameters)}
     scale = np.asarray(h_c, dtype=float) / params.h_c
     values["h_c"] = np.asarray(h_c, dtype=float)
-    for key in ("k_t", "k_c"):
-        values[key] = (np.full_like(scale, fixed_decay[key]) if key in fixed_decay
-                       else getattr(params, key) * scale)
+    printed = "eq3.26" in params.printed_forms  # k not proportional to h_c (errata §1.1)
+    for key, eps in (("k_t", params.eps_t), ("k_c", params.eps_c)):
+        k = getattr(params, key)
+        if key in fixed_decay:
+            values[key] = np.full_like(scale, fixed_decay[key])
+        elif printed:  # back to the corrected k, scaled, then eq. 3.26 as printed per point
+            values[key] = printed_lower_limit_decay(k * np.exp(-k * eps) * scale, eps)
+        else:
+            values[key] = k * scale
     return ConcretePointParameters(**values)
 
 
@@ -57,12 +73,20 @@ def concrete_parameters(c: Concrete, h_c: float) -> ConcreteParameters:
                                  "fcb_ratio": c.surface.biaxial_ratio,
                                  "compression_tension_rule": c.compression_tension_rule,
                                  "mode_rule_band": c.mode_rule_band,
-                                 "post_peak_strength": c.post_peak_strength}
+                                 "post_peak_strength": c.post_peak_strength,
+                                 "nu_max": c.nu_max, "printed_forms": tuple(c.printed_forms),
+                                 "compression_branch": c.compression_branch}
     for deck_key, key in (("E", "E0"), ("ft", "ft"), ("alpha", "alpha"), ("k_t", "k_t"),
                           ("k_c", "k_c")):
         if getattr(c, deck_key) is not None:
             overrides[key] = getattr(c, deck_key)
     overrides["f1"], overrides["f2"] = _surface_points(c.surface.f1_ratio, c.surface.f2_ratio)
+    if c.surface.calibration != "control_points":  # errata §2.2 set A, refitted or as fitted
+        for key in ("fcb_ratio", "f1", "f2"):
+            overrides.pop(key)
+        ft = c.ft if c.ft is not None else 0.33 * math.sqrt(c.fc)  # eq. 4.2, as derived
+        overrides["surface"] = (elwi_murray_refit(ft / c.fc) if c.surface.calibration == "A_refit"
+                                else SET_A_ELWI_MURRAY)
     if "k_t" in overrides:
         overrides.pop("Gf")
     return derive_concrete_parameters(c.fc, h_c, **overrides)
@@ -114,7 +138,11 @@ def _concrete_law(c: Concrete, analysis: Analysis, params: ConcreteParameters,
     own_moduli = not tangent and (floor > 0.0 or coaxial)  # built by the law from the trial state
     # $ICEWALL_CONCRETE_KERNEL: the same update and moduli compiled (the deck's differenced
     # `tangent` stays NumPy; update(..., tangent=True) differentiates the compiled update)
-    kernel = (choose_kernel(analysis.formulation, c.trial_stress) if own_moduli else "numpy")
+    # the printed point forms and the linear branch (App. A) are written in NumPy only
+    numpy_only = bool(set(c.printed_forms) & set(POINT_FORMS)) or c.compression_branch != \
+        "exponential"
+    kernel = (choose_kernel(analysis.formulation, c.trial_stress)
+              if own_moduli and not numpy_only else "numpy")
     return ConcreteLaw(concrete_point_parameters(params, h_points, fixed), analysis.formulation,
                        c.substep_ratio * params.eps_t,  # sub-steps of the cracking strain
                        c.trial_stress, floor, coaxial, own_moduli, kernel)

@@ -135,7 +135,9 @@ def test_overrides_propagate_and_unknown_raises() -> None:
     with pytest.raises(TypeError):
         derive_concrete_parameters(40.0, 20.0, surface=SET_A_ELWI_MURRAY, f1=(-1.5, 0.7))
     with pytest.raises(ValueError):
-        derive_concrete_parameters(40.0, 20.0, nu_max=0.5)
+        derive_concrete_parameters(40.0, 20.0, nu_max=0.51)
+    # the thesis' own limit (3.2.6, "the incompressible limit of 0.5 is retained") is allowed
+    assert derive_concrete_parameters(40.0, 20.0, nu_max=0.5).nu_max == 0.5
     with pytest.raises(ValueError):
         derive_concrete_parameters(40.0, 20.0, alpha=0.1)  # A_c < 0
 
