@@ -19,6 +19,8 @@ from icewall.environment import check_environment
 from icewall.errors import DeckError, IcewallError, Interrupted
 
 SET_HELP = "Override a deck value, e.g. --set materials.concrete.fc=40 (repeatable)."
+PROFILE_HELP = ("Apply a deck profile under --set: a NAME in decks/profiles/ (e.g. thesis) or a "
+                "path to a profile file.")
 
 
 def _raise_interrupted(signum, frame) -> None:
@@ -124,15 +126,16 @@ def main(verbose: int) -> None:
 @main.command()
 @click.argument("deck", type=click.Path(dir_okay=False))
 @click.option("--set", "overrides", multiple=True, help=SET_HELP)
+@click.option("--profile", default=None, metavar="NAME", help=PROFILE_HELP)
 @click.option("--json", "as_json", is_flag=True, help="Print the validated deck as JSON.")
 @_handle_errors
-def check(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
+def check(deck: str, overrides: tuple[str, ...], profile: str | None, as_json: bool) -> None:
     """Validate DECK without running it (exit code 2 on any problem)."""
     from dataclasses import asdict
 
     from icewall.deck.load import load_deck
 
-    loaded = load_deck(deck, overrides)
+    loaded = load_deck(deck, overrides, profile)
     _warn_resources(loaded)
     if as_json:
         click.echo(json.dumps(asdict(loaded.deck), indent=2))
@@ -147,8 +150,10 @@ def check(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
               type=click.Path(file_okay=False), help="Directory for the mesh files.")
 @click.option("--format", "formats", default="msh,vtu,xdmf", show_default=True,
               help="Comma-separated: msh, vtu, xdmf.")
+@click.option("--profile", default=None, metavar="NAME", help=PROFILE_HELP)
 @_handle_errors
-def mesh(deck: str, overrides: tuple[str, ...], out_dir: str, formats: str) -> None:
+def mesh(deck: str, overrides: tuple[str, ...], out_dir: str, formats: str,
+         profile: str | None) -> None:
     """Mesh DECK, write the mesh files and print counts and Gauss-point spacing h_c."""
     from icewall.deck.load import load_deck
     from icewall.mesh.build import build_mesh
@@ -158,7 +163,7 @@ def mesh(deck: str, overrides: tuple[str, ...], out_dir: str, formats: str) -> N
     if unknown := [f for f in chosen if f not in FORMATS] or ([] if chosen else ["(none)"]):
         raise click.BadParameter(f"unknown mesh format(s) {', '.join(unknown)}; choose from "
                                  f"{', '.join(FORMATS)}", param_hint="--format")
-    loaded = load_deck(deck, overrides)
+    loaded = load_deck(deck, overrides, profile)
     the_mesh = build_mesh(loaded.deck)
     stem = Path(out_dir) / Path(deck).stem
     for path in write_mesh(the_mesh, stem, chosen):
@@ -176,9 +181,10 @@ def mesh(deck: str, overrides: tuple[str, ...], out_dir: str, formats: str) -> N
 @click.option("--resume", is_flag=True,
               help="Go on with the interrupted run of DECK (same deck, --set and output) from "
                    "its last converged step, in the same result file.")
+@click.option("--profile", default=None, metavar="NAME", help=PROFILE_HELP)
 @_handle_errors
 def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool,
-        resume: bool) -> None:
+        resume: bool, profile: str | None) -> None:
     """Run the analysis of DECK and write an HDF5 result."""
     from icewall.deck.load import load_deck
     from icewall.pipeline import run_deck
@@ -186,7 +192,7 @@ def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool,
     if output is not None and not output.strip():
         raise click.BadParameter("is empty: give a result file or a directory",
                                  param_hint="-o/--output")
-    loaded = load_deck(deck, overrides)
+    loaded = load_deck(deck, overrides, profile)
     _warn_resources(loaded, None if output is None else
                     str(Path(output).parent if output.endswith(".h5") else output))
     report = run_deck(loaded, output, progress=None if quiet else click.echo, resume=resume)
@@ -222,17 +228,18 @@ def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool,
               help="Runs of each job: the job and K-1 round-off realizations (load patches "
                    "widened by k 1e-8); OUT/sweep_realizations.csv gives the band of each "
                    "figure over them.")
+@click.option("--profile", default=None, metavar="NAME", help=PROFILE_HELP)
 @_handle_errors
 def sweep(decks: tuple[str, ...], sweep_file: str | None, overrides: tuple[str, ...],
           outdir: str, workers: int | None, scheduler: str | None, force: bool, dry_run: bool,
-          quiet: bool, realizations: int) -> None:
+          quiet: bool, realizations: int, profile: str | None) -> None:
     """Run DECKS (and/or a sweep file) over parameter variations, in parallel and resumably;
     writes one HDF5 per run and OUT/sweep_summary.csv with test/predicted ratios."""
     from icewall.analysis.sweep import sweep_command
 
     sys.exit(sweep_command(decks, sweep_file=sweep_file, overrides=overrides, outdir=outdir,
                            workers=workers, scheduler=scheduler, force=force, quiet=quiet,
-                           dry_run=dry_run, realizations=realizations))
+                           dry_run=dry_run, realizations=realizations, profile=profile))
 
 
 @main.command()
@@ -277,9 +284,10 @@ def summary(result: str, as_json: bool) -> None:
 @main.command()
 @click.argument("deck", type=click.Path(dir_okay=False))
 @click.option("--set", "overrides", multiple=True, help=SET_HELP)
+@click.option("--profile", default=None, metavar="NAME", help=PROFILE_HELP)
 @click.option("--json", "as_json", is_flag=True, help="Print the rows as JSON.")
 @_handle_errors
-def params(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
+def params(deck: str, overrides: tuple[str, ...], profile: str | None, as_json: bool) -> None:
     """Derived concrete parameters per region (E, f't, eps_c, G_f, G_cr, alpha, h_c, k_t, k_c),
     to check against the thesis' Table 4.4 before running; warns where h_c is too large for
     the crack band (snap-back of the softening branch)."""
@@ -287,7 +295,7 @@ def params(deck: str, overrides: tuple[str, ...], as_json: bool) -> None:
     from icewall.mesh.build import build_mesh
     from icewall.model.params_report import concrete_parameter_rows, format_parameter_rows
 
-    loaded = load_deck(deck, overrides)
+    loaded = load_deck(deck, overrides, profile)
     rows = concrete_parameter_rows(loaded.deck, build_mesh(loaded.deck))
     if as_json:
         click.echo(json.dumps(rows, indent=2))

@@ -15,6 +15,7 @@ import numpy as np
 
 from icewall import __version__
 from icewall.deck.load import LoadedDeck
+from icewall.deck.profile import Profile
 from icewall.errors import ConvergenceError, ResultError
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
@@ -85,11 +86,22 @@ def code_version() -> str:
     return f"{__version__}+{digest.hexdigest()[:12]}"
 
 
-def run_stamp(deck_text: str, overrides) -> str:
-    """What makes a run the same run: deck text, --set overrides and code (JSON, stored as
+def run_stamp(deck_text: str, overrides, profile: Profile | None = None) -> str:
+    """What makes a run the same run: deck text, overrides (a profile's assignments, then
+    --set), the profile (name and text digest, where one is applied) and code (JSON, stored as
     the result's `run_stamp` attribute; a sweep reuses a result only if it matches)."""
-    return json.dumps({"deck_sha256": hashlib.sha256(deck_text.encode()).hexdigest(),
-                       "overrides": list(overrides), "code": code_version()})
+    stamp = {"deck_sha256": hashlib.sha256(deck_text.encode()).hexdigest(),
+             "overrides": list(overrides), "code": code_version()}
+    if profile is not None:
+        stamp["profile"] = f"{profile.name} {profile.sha256}"
+    return json.dumps(stamp)
+
+
+def profile_attrs(profile: Profile | None) -> dict[str, str]:
+    """The result attributes naming the profile of a run (none without one)."""
+    if profile is None:
+        return {}
+    return {"profile": profile.name, "profile_path": profile.path, "profile_text": profile.text}
 
 
 @dataclass(frozen=True)
@@ -180,7 +192,8 @@ def _run_locked(loaded: LoadedDeck, path: Path, lock: OutputLock,
              "load_measure": model.measure_name, "load_unit": model.measure_unit,
              "icewall_version": __version__,
              "deck_overrides": json.dumps(list(loaded.overrides)),
-             "run_stamp": run_stamp(loaded.text, loaded.overrides),
+             "run_stamp": run_stamp(loaded.text, loaded.overrides, loaded.profile),
+             **profile_attrs(loaded.profile),
              "warnings": json.dumps(warnings), **extra}
     if restart is None or restart.checkpoint is None:
         writer = ResultWriter(path, deck_text=loaded.text, deck_path=loaded.path, mesh=mesh,

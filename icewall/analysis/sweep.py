@@ -42,6 +42,7 @@ from icewall.analysis.sweep_table import (
     write_csv,
 )
 from icewall.deck.load import load_deck
+from icewall.deck.profile import find_profile
 from icewall.deck.resources import MAX_RUNS
 from icewall.deck.yamlsrc import load_yaml
 from icewall.errors import DeckError, Interrupted, ResultError
@@ -119,9 +120,11 @@ def _run_name(deck: str, varied: Iterable[tuple[str, str]]) -> str:
 
 
 def expand_jobs(decks: Iterable[str | Path] = (), sets: Iterable[str] = (),
-                sweep_file: str | Path | None = None, outdir: str | Path = "results/sweep"
-                ) -> list[Job]:
-    """Jobs of a sweep: decks (CLI, then the sweep file's) x cartesian product of varied values."""
+                sweep_file: str | Path | None = None, outdir: str | Path = "results/sweep",
+                profile: str | None = None) -> list[Job]:
+    """Jobs of a sweep: decks (CLI, then the sweep file's) x cartesian product of varied values;
+    `profile` (a name or path, deck.profile) applies to every job, under its overrides."""
+    profile_file = None if profile is None else str(find_profile(profile).resolve())
     deck_list, vary, fixed = _read_sweep_file(sweep_file) if sweep_file else ([], {}, {})
     deck_list = [str(d) for d in decks] + deck_list
     where = str(sweep_file) if sweep_file else "icewall sweep"
@@ -152,7 +155,8 @@ def expand_jobs(decks: Iterable[str | Path] = (), sets: Iterable[str] = (),
         for combo in itertools.product(*([(k, v) for v in vs] for k, vs in vary.items())):
             name = _run_name(deck, combo)
             varied = tuple(f"{k}={v}" for k, v in combo)
-            job = Job(name, deck, fixed_over + varied, varied, str(Path(outdir) / f"{name}.h5"))
+            job = Job(name, deck, fixed_over + varied, varied, str(Path(outdir) / f"{name}.h5"),
+                      profile_file)
             if name in jobs and jobs[name] != job:
                 raise DeckError(f"two runs would share the name {name} "
                                 f"({jobs[name].deck}, {deck}): rename one deck", where)
@@ -196,12 +200,12 @@ def with_realizations(jobs: list[Job], realizations: int) -> list[Job]:
     out = []
     for job in jobs:
         out.append(job)
-        width = load_deck(job.deck, list(job.overrides)).deck.loads.patches.width
+        width = load_deck(job.deck, list(job.overrides), job.profile).deck.loads.patches.width
         for k in range(1, realizations):
             wider = f"loads.patches.width={width * (1.0 + k * PERTURBATION)!r}"
             name = realization_name(job.name, k)
             out.append(Job(name, job.deck, job.overrides + (wider,), job.varied + (wider,),
-                           str(Path(job.output).with_name(f"{name}.h5"))))
+                           str(Path(job.output).with_name(f"{name}.h5")), job.profile))
     return out
 
 
@@ -219,15 +223,27 @@ def reuse_verdict(job: Job) -> tuple[str | None, str]:
     if stamp is None:
         return None, "the earlier result has no run stamp"
     try:
-        theirs, ours = json.loads(stamp), json.loads(run_stamp(text, job.overrides))
+        ours = json.loads(_job_stamp(job, text))
+    except DeckError:
+        return None, "the deck or its profile does not load"
+    try:
+        theirs = json.loads(stamp)
     except (TypeError, ValueError):
         return None, "the earlier result's run stamp is damaged"
-    differs = [what for key, what in (("deck_sha256", "deck text"), ("overrides", "overrides"),
-                                      ("code", "code version"))
-               if not isinstance(theirs, dict) or theirs.get(key) != ours[key]]
+    differs = [what for key, what in (("deck_sha256", "deck text"), ("profile", "profile"),
+                                      ("overrides", "overrides"), ("code", "code version"))
+               if not isinstance(theirs, dict) or theirs.get(key) != ours.get(key)]
     if differs:
         return None, f"the earlier result differs in {', '.join(differs)}"
     return (status, "") if status in FINISHED else (None, f"the earlier run {status}")
+
+
+def _job_stamp(job: Job, text: str) -> str:
+    """The run stamp a run of `job` stores (its profile's assignments among the overrides)."""
+    if job.profile is None:
+        return run_stamp(text, job.overrides)
+    loaded = load_deck(job.deck, job.overrides, job.profile)
+    return run_stamp(loaded.text, loaded.overrides, loaded.profile)
 
 
 def finished_status(job: Job) -> str | None:
@@ -241,7 +257,7 @@ def validate_jobs(jobs: Iterable[Job]) -> None:
     that run fails with the same message and the others go on."""
     for job in jobs:
         try:
-            load_deck(job.deck, job.overrides)
+            load_deck(job.deck, job.overrides, job.profile)
         except DeckError as exc:
             raise DeckError(f"{exc.detail} (in run {job.name})", exc.file, exc.line,
                             exc.key) from None
@@ -251,24 +267,28 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
                   overrides: Iterable[str] = (), outdir: str = "results/sweep",
                   workers: int | None = None, scheduler: str | None = None,
                   force: bool = False, quiet: bool = False, dry_run: bool = False,
-                  echo: Callable[[str], None] | None = None, realizations: int = 1) -> int:
+                  echo: Callable[[str], None] | None = None, realizations: int = 1,
+                  profile: str | None = None) -> int:
     """Body of `icewall sweep`; returns the exit status (0: every run completed, 1: not).
 
     CLI: `icewall sweep [DECK]... [-f/--file SWEEP.yaml] [--set key.path=v1,v2 ...]
     [-o/--out OUTDIR (results/sweep)] [-j/--workers N (os.cpu_count())] [--scheduler ADDRESS]
-    [--force] [--dry-run] [-q/--quiet] [--realizations K]`. Deck errors raise DeckError (exit 2)
-    before any run. With K > 1 every run has K - 1 round-off realizations beside it
-    (with_realizations) and OUTDIR/sweep_realizations.csv gives the band each figure spans.
+    [--force] [--dry-run] [-q/--quiet] [--realizations K] [--profile NAME]`. Deck errors raise
+    DeckError (exit 2) before any run. With K > 1 every run has K - 1 round-off realizations
+    beside it (with_realizations) and OUTDIR/sweep_realizations.csv gives the band each figure
+    spans. `profile` applies to every run (expand_jobs).
     """
     if echo is None:
         import click
 
         echo = click.echo
     say = (lambda text: None) if quiet else echo
-    jobs = with_realizations(expand_jobs(decks, overrides, sweep_file, outdir), realizations)
+    jobs = with_realizations(expand_jobs(decks, overrides, sweep_file, outdir, profile),
+                             realizations)
     if dry_run:  # every run's deck and overrides checked: a listed run is one that can start
         for job in jobs:
-            echo(f"{job.name}  {job.deck}  {' '.join(job.overrides)}  -> {job.output}")
+            shown = f"--profile {job.profile} " if job.profile else ""
+            echo(f"{job.name}  {job.deck}  {shown}{' '.join(job.overrides)}  -> {job.output}")
         validate_jobs(jobs)
         return 0
     make_output_directory(outdir)

@@ -24,6 +24,7 @@ class Job:
     overrides: tuple[str, ...]
     varied: tuple[str, ...]
     output: str
+    profile: str | None = None  # the profile file applied under the overrides (deck.profile)
 
 
 _RUN_IN_PROGRESS = False  # in a worker: whether run_job is running (SIGTERM interrupts it)
@@ -38,7 +39,7 @@ def run_job(job: Job) -> dict:
            "run_time_s": 0.0, "n_steps": 0}
     _RUN_IN_PROGRESS = True
     try:
-        loaded = load_deck(job.deck, job.overrides)
+        loaded = load_deck(job.deck, job.overrides, job.profile)
         report = run_deck(loaded, job.output, progress=None, replace=True,
                           attrs={"sweep_overrides": json.dumps(list(job.overrides))})
         out.update(path=report.path, status=report.status, reason=report.reason,
@@ -161,7 +162,8 @@ def run_dask(jobs: list[Job], address: str, done: Callable[[dict], None],
     except ImportError:
         raise IcewallError("--scheduler needs Dask: pip install 'icewall[cluster]'") from None
     absolute = [Job(j.name, os.path.abspath(j.deck), j.overrides, j.varied,
-                    os.path.abspath(j.output)) for j in jobs]
+                    os.path.abspath(j.output),
+                    None if j.profile is None else os.path.abspath(j.profile)) for j in jobs]
     try:
         client = Client(address, timeout="20s")
     except (OSError, TimeoutError, ValueError) as exc:

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from icewall.deck.fields import Context, build
+from icewall.deck.profile import Profile, attribute_error, load_profile
 from icewall.deck.schema import Deck
 from icewall.deck.validate import validate
 from icewall.deck.yamlsrc import LineDict, LineList, load_yaml, parse_yaml, read_yaml, short_repr
@@ -23,7 +24,8 @@ class LoadedDeck:
     text: str
     path: str
     tree: LineDict
-    overrides: tuple[str, ...] = ()  # the --set assignments applied on top of `text`
+    overrides: tuple[str, ...] = ()  # the profile's assignments, then --set, on `text`
+    profile: Profile | None = None  # the profile applied under --set (deck.profile)
 
     def line_of(self, key_path: str) -> int | None:
         return line_of(self.tree, key_path)
@@ -73,22 +75,46 @@ def apply_override(tree: LineDict, assignment: str, file: str) -> None:
         node.key_lines[keys[-1]] = None
 
 
-def load_deck(path: str | Path, overrides: tuple[str, ...] | list[str] = ()) -> LoadedDeck:
-    """Read, override, build and validate a deck file. Raises DeckError on any problem."""
+def load_deck(path: str | Path, overrides: tuple[str, ...] | list[str] = (),
+              profile: str | Profile | None = None) -> LoadedDeck:
+    """Read, override, build and validate a deck file; `profile` (a name, a path or a loaded
+    Profile) is applied under the overrides (deck.profile). Raises DeckError on any problem."""
     text, tree = read_yaml(path)
-    return _finish(text, tree, str(path), overrides)
+    return _finish(text, tree, str(path), overrides, load_profile(profile))
 
 
 def load_deck_text(text: str, name: str = "<deck>",
-                   overrides: tuple[str, ...] | list[str] = ()) -> LoadedDeck:
+                   overrides: tuple[str, ...] | list[str] = (),
+                   profile: str | Profile | None = None) -> LoadedDeck:
     """Same as load_deck for deck text held in memory (tests, results files)."""
-    return _finish(text, parse_yaml(text, name), name, overrides)
+    return _finish(text, parse_yaml(text, name), name, overrides, load_profile(profile))
 
 
-def _finish(text: str, tree: LineDict, file: str, overrides) -> LoadedDeck:
-    for assignment in overrides:
-        apply_override(tree, assignment, file)
-    deck = build(Deck, tree, Context(file))
-    loaded = LoadedDeck(deck=deck, text=text, path=file, tree=tree, overrides=tuple(overrides))
-    validate(loaded.deck, lambda message, key: DeckError(message, file, loaded.line_of(key), key))
+def _specimen_key(tree: LineDict, key: str) -> str | None:
+    specimen = tree.get("specimen")
+    value = specimen.get(key) if isinstance(specimen, dict) else None
+    return value if isinstance(value, str) else None
+
+
+def _finish(text: str, tree: LineDict, file: str, overrides, profile: Profile | None
+            ) -> LoadedDeck:
+    user = list(overrides)
+    assignments = ([] if profile is None else
+                   profile.assignments(_specimen_key(tree, "name"), _specimen_key(tree, "series")))
+    user_keys = [o.split("=", 1)[0].strip() for o in user]
+    try:
+        for item in assignments:
+            apply_override(tree, item.text, profile.path if profile else file)
+        for assignment in user:
+            apply_override(tree, assignment, file)
+        deck = build(Deck, tree, Context(file))
+        loaded = LoadedDeck(deck=deck, text=text, path=file, tree=tree,
+                            overrides=tuple(item.text for item in assignments) + tuple(user),
+                            profile=profile)
+        validate(loaded.deck,
+                 lambda message, key: DeckError(message, file, loaded.line_of(key), key))
+    except DeckError as exc:
+        if profile is None:
+            raise
+        raise attribute_error(exc, assignments, profile, user_keys) from None
     return loaded
