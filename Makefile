@@ -9,7 +9,7 @@ DECK ?= decks/cf4.yaml
 NEWTON := --set analysis.scheme=newton --set materials.concrete.mode_rule_band=0.1 \
 	--set materials.concrete.post_peak_strength=peak
 
-.PHONY: run test lint stability validate compare convergence convergence-newton cylinder bench schema clean
+.PHONY: run test test-platforms lint stability validate compare convergence convergence-newton cylinder bench schema clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -27,8 +27,11 @@ run: $(STAMP)  ## run the CF-4 deck (or DECK=...), storing the state fields the 
 test: $(STAMP)  ## the default test suite (fast; no long validation runs)
 	$(BIN)/python -m pytest -q -m "not slow"
 
+test-platforms: $(STAMP)  ## the numerical test folders under every OpenBLAS kernel this CPU runs (by hand, before a numerical change lands; not part of `make test`)
+	$(BIN)/python tools/test_platforms.py
+
 lint: $(STAMP)
-	$(BIN)/ruff check icewall tests benchmarks
+	$(BIN)/ruff check icewall tests benchmarks tools
 
 stability: $(STAMP)  ## the stability suite: stiff and extreme cases, each run twice (minutes)
 	$(BIN)/python -m pytest -q -m stability tests/stability

@@ -99,10 +99,17 @@ class DissipationControl:
         return _correction(self.residual(u, P), float(g @ q1), float(g @ q2), h)
 
 
+SINGULAR_BORDER = 1e-12
+"""A control row whose g.q1 + h is below this fraction of |g.q1| + |h| is singular."""
+
+
 def _correction(phi: float, g_q1: float, g_q2: float, h: float) -> float:
     """dP of the linearised constraint phi + g.(dP q1 + q2) + h dP = 0."""
     denominator = g_q1 + h
-    if not abs(denominator) > 0.0 or not np.isfinite(denominator):
+    # a denominator lost in the round-off of its terms fixes no load factor (the energy
+    # released along an elastic tangent, where g.q1 = -h)
+    if not abs(denominator) > SINGULAR_BORDER * (abs(g_q1) + abs(h)) or not np.isfinite(
+            denominator):
         return float("nan")
     return -(phi + g_q2) / denominator
 

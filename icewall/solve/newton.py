@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from icewall.errors import ConvergenceError
 from icewall.solve.control import Increment, PathState, StepFailed, _external_force_norm
 from icewall.solve.controls import LoadControl
 from icewall.solve.problem import Problem
@@ -87,6 +88,17 @@ def _trial_gap_force(problem: Problem, multiplier_increment: np.ndarray, eta: fl
 
 PREDICTOR_PROBE = 1e-6
 """The first iteration's tangent is taken this fraction of the last increment ahead."""
+PROBE_FLOOR = 1e-9
+"""... but never less than this fraction of the displacements ahead: a shorter probe is lost
+in the round-off of the strains, and at a point on a kink of its law (a located limit point:
+docs/solver.md, item 35) the tangent would be that of whichever side the last bits fall on."""
+
+
+def _probe(u: np.ndarray, last_increment: np.ndarray) -> np.ndarray:
+    """Where the first iteration's tangent is taken: ahead of u along the last increment."""
+    size = _norm(last_increment)
+    scale = max(PREDICTOR_PROBE, PROBE_FLOOR * _norm(u) / size)
+    return u + scale * last_increment
 
 
 def newton_increment(problem: Problem, settings: SolverSettings, start: PathState,
@@ -135,7 +147,7 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         matrix_at = tangent
         if iteration == 1 and last_increment is not None and _norm(last_increment) > 0.0:
             matrix_at = problem.structure.evaluate(
-                current.u + PREDICTOR_PROBE * last_increment, start.states, tangent=True)
+                _probe(current.u, last_increment), start.states, tangent=True)
         elif previous_moduli is not None:
             matrix_at = _chords_at_kinks(tangent, current.evaluation.moduli, previous_moduli,
                                          forensics)
@@ -210,9 +222,8 @@ def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
     """(du, dP, dlam) of a full Newton step: one factorisation of the augmented tangent (plus
     a drop sub-step's D / dt), two solves (reference load and unbalance), the load factor from
     the control's row."""
-    s, c = problem.structure, problem.constraints
-    K = s.stiffness(matrix_at)
-    factor = c.factorize(K if dampers is None else K + dampers.shift())
+    c = problem.constraints
+    factor = _factorize(problem, current, matrix_at, dampers)
     rhs_unbalance = c.unbalance_rhs(current.structural, current.u)
     if isinstance(control, LoadControl):
         du, dm = c.split(factor.solve(rhs_unbalance))
@@ -228,6 +239,26 @@ def _newton_direction(problem: Problem, current: Iterate, control, matrix_at,
     if not np.all(np.isfinite(du)):
         raise StepFailed("non-finite displacement correction", "NaN")
     return du, dP, dm
+
+
+def _factorize(problem: Problem, current: Iterate, matrix_at, dampers: Dampers | None):
+    """The factorisation of the iteration matrix built from `matrix_at`. Where the consistent
+    tangent is singular (a Gauss point sitting on a kink of its law, whose tangent there is
+    the branch's it rounds to: the snap-back bar's weak element at its peak strain), the law's
+    secant moduli at the same iterate (a chord through the origin of each point's branch)
+    stand in the matrix instead; the residual stays the law's as it is (docs/solver.md, item
+    35). A system singular under both is singular."""
+    s, c = problem.structure, problem.constraints
+    shift = None if dampers is None else dampers.shift()
+    K = s.stiffness(matrix_at)
+    try:
+        return c.factorize(K if shift is None else K + shift)
+    except ConvergenceError as exc:
+        if exc.reason != "singular system" or not getattr(matrix_at, "tangent", False):
+            raise
+        log.debug("singular consistent tangent (%s): the secant moduli stand in", exc)
+    K = s.stiffness(current.evaluation)
+    return c.factorize(K if shift is None else K + shift)
 
 
 def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.ndarray,

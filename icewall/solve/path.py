@@ -62,6 +62,9 @@ STILL = 1e-9
 and the load factor by less than this fraction of itself has not moved the path."""
 STAGNANT_STEPS = 5
 """Consecutive steps that do not move the path after which the run stops (stagnation)."""
+LOCATED_WIDTH = 1e-12
+"""A limit point's bracket narrower than this fraction of the increment is located whatever
+the slope (round-off of the deflection itself)."""
 
 
 def _controller(settings: SolverSettings, largest: float) -> StepSizeController:
@@ -157,12 +160,34 @@ def _next_state(problem: Problem, state: PathState, inc: Increment, resume: tupl
 class _Mode:
     """The control of the next step and its size: "displacement" (deflection step `size`),
     "opening" (the snap-back control, `release`) or "drop" (at a fixed deflection, its
-    sub-steps starting from the 1/dt the last drop ended with, `damping`)."""
+    sub-steps starting from the 1/dt the last drop ended with, `damping`).
+
+    Where displacement control fails at its smallest step, the limit point of the path is
+    located before the snap-back control or the drop takes over: the bracket between the last
+    converged deflection and the smallest one that failed (`ceiling`) is bisected until the
+    load it can hide, `slope` (the secant dP/dd of the last converged step; an upper bound of
+    the path's slope beyond it where the path is concave, as before a peak) times its width,
+    is within a quarter of the load tolerance (eq. 4.5) of the load. The peak is then a
+    property of the path, not of where the steps fell (docs/solver.md, item 35)."""
 
     name: str
     size: float
     release: float
     damping: float = FIRST_INVERSE_STEP
+    ceiling: float = math.nan  # the smallest deflection that failed in the bracket (locating)
+    slope: float = math.nan  # the secant dP/dd of the last converged displacement step
+    peak: float = 0.0  # the largest |load factor| so far: the scale of a separated structure
+    halt: bool = False  # stop after the step just taken (on_snap_back: stop, separated)
+
+    def located(self, current: float, load: float, settings: SolverSettings) -> bool:
+        """Whether the bracket [current, ceiling] pins the limit point's load to the
+        tolerance: the load was not rising (slope <= 0) or slope * width <= tol |P| / 4."""
+        width = self.ceiling - current
+        if not self.slope > 0.0 or not width > 0.0:
+            return True
+        floor = LOCATED_WIDTH * max(settings.increment, 1e-30)
+        return (self.slope * width <= 0.25 * settings.tolerance_load * abs(load)
+                or width <= floor)
 
     def control(self, problem: Problem, path: _Path, current: float,
                 steps: StepSizeController, settings: SolverSettings) -> tuple[object, str]:
@@ -172,7 +197,8 @@ class _Mode:
                     f"control {current:.4g} (snap-back control, step {self.release:.3g})")
         step = self.size if self.name == "displacement" else steps.smallest
         if self.name == "drop" and settings.drop_held == "stroke":
-            stroke = StrokeControl.of_load(path.R)
+            stroke = StrokeControl.of_load(path.R)  # never past the run's target
+            step = min(step, settings.target - current)
             stroke = replace(stroke, target=stroke.measure(path.state.u) + step)
             return stroke, (f"control {current:.4g}, stroke {stroke.target:.4g} (drop at a "
                             "fixed stroke)")
@@ -182,9 +208,18 @@ class _Mode:
         return DisplacementControl(problem.control_equation, goal), where
 
     def after_failure(self, exc: Exception, where: str, steps: StepSizeController,
-                      settings: SolverSettings) -> None:
-        """Cut the step, or switch to the next control; ConvergenceError when none is left."""
+                      settings: SolverSettings, current: float = 0.0,
+                      load: float = 0.0) -> None:
+        """Cut the step, bisect the bracket of a limit point, or switch to the next control;
+        ConvergenceError when none is left. `current`, `load`: the last converged state."""
         reason = getattr(exc, "reason", "non-convergence")
+        if self.name == "displacement" and self.size <= steps.smallest * (1 + 1e-9):
+            self.ceiling = current + self.size  # the failed deflection bounds the bracket
+            if not self.located(current, load, settings):
+                self.size *= 0.5
+                return
+            self.size = steps.smallest  # the next control starts from the located point
+        self.ceiling = math.nan
         stop = settings.on_snap_back == "stop"
         if self.name == "drop":
             raise ConvergenceError(f"{exc} at {where}: neither displacement control at its "
@@ -218,18 +253,36 @@ class _Mode:
                       steps: StepSizeController, settings: SolverSettings) -> None:
         """Size the next step, and leave a snap-back control once load and deflection rise
         together again."""
+        self.peak = max(self.peak, abs(inc.load_factor))
         if self.name == "drop":
             inc.snap_back, self.name = True, "displacement"
+            self.slope = d_load / d_deflection if d_deflection > 0.0 else math.nan
         elif self.name == "opening":
             inc.snap_back = d_deflection < 0.0
             growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
             self.release *= min(2.0, max(0.5, growth))
-            # a step met within the tolerance at once moved too little to tell the way
-            if d_deflection > 0.0 and d_load > 0.0 and inc.iterations > 1:
+            if abs(inc.load_factor) <= settings.tolerance_load * self.peak:
+                # the snap-back has separated the structure (no load left within the
+                # tolerance): nothing more to trace, and its tangent is singular; only drops
+                # at fixed deflections go on (on_snap_back: stop stops after this step)
+                self.halt = settings.on_snap_back == "stop"
+                self._switch("drop", "the traced snap-back separated the structure")
+            elif d_deflection > STILL * settings.increment and d_load > 0.0:
+                # load and deflection rise together again (beyond round-off)
                 self.name = "displacement"
                 self.size = max(steps.smallest, min(steps.largest, d_deflection))
-        else:
+                self.slope = d_load / d_deflection
+        elif math.isnan(self.ceiling):
             self.size = steps.after_success(self.size, inc.iterations)
+            self.slope = d_load / d_deflection if d_deflection > 0.0 else math.nan
+        elif inc.control_displacement >= self.ceiling - LOCATED_WIDTH * settings.increment:
+            self.ceiling, self.size = math.nan, steps.smallest  # its end converged after all
+        elif self.located(inc.control_displacement, inc.load_factor, settings):
+            self.size = self.ceiling - inc.control_displacement  # its end once more: the switch
+        else:  # locating a limit point: bisect the bracket, never retry its failed end (the
+            # slope stays the secant of the step before it: the bound, and not the noise of
+            # a load change within the tolerance over a tiny step)
+            self.size = 0.5 * (self.ceiling - inc.control_displacement)
 
     def _switch(self, name: str, where: str) -> None:
         self.name = name
@@ -245,9 +298,10 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
     steps = _controller(settings, settings.increment)
     mode, stagnant = _Mode("displacement", steps.largest, 0.0), 0
     if resume:  # (size, release, 1.0 under the snap-back control, stagnant steps, 1/dt of
-        # the drops): below
+        # the drops, a limit point's bracket end and slope, the peak): below
         mode = _Mode("opening" if resume[2] else "displacement", resume[0], resume[1],
-                     resume[4] if len(resume) > 4 else FIRST_INVERSE_STEP)
+                     resume[4] if len(resume) > 4 else FIRST_INVERSE_STEP,
+                     *(resume[5:8] if len(resume) > 7 else ()))
         stagnant = int(resume[3])
     path = _Path(problem, state, preload)
     last_increment = state.last_increment
@@ -263,10 +317,13 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             else:
                 inc = newton_increment(problem, settings, state, control, preload,
                                        last_increment=last_increment)
+            if mode.name == "opening" and inc.control_displacement > settings.target * (
+                    1 + 1e-12):
+                raise StepFailed("the opening step passed the target deflection", "overshoot")
         except (StepFailed, ConvergenceError) as exc:
             c.rollback()
             log.info("%s: %s", where, exc)
-            mode.after_failure(exc, where, steps, settings)
+            mode.after_failure(exc, where, steps, settings, current, state.load_factor)
             continue
         c.commit()
         inc.wall_time = time.perf_counter() - tic
@@ -279,10 +336,16 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         last_increment = inc.u - state.u
         state = _next_state(problem, state, inc, ("control", mode.size, mode.release,
                                                   float(mode.name == "opening"),
-                                                  float(stagnant), mode.damping))
+                                                  float(stagnant), mode.damping,
+                                                  mode.ceiling, mode.slope, mode.peak))
         state.last_increment = last_increment
         path.state = state
         yield inc, state
+        if mode.halt:
+            raise ConvergenceError(f"the traced snap-back separated the structure at {where}: "
+                                   "no load is carried, and only drops at fixed deflections go "
+                                   "on (analysis.on_snap_back: stop; 'continue' takes them)",
+                                   reason="snap-back")
         if stagnant >= STAGNANT_STEPS and mode.name == "opening":
             mode._switch("drop", where)  # the traced snap-back stalls: the test drops
             stagnant = 0

@@ -89,11 +89,18 @@ def test_softening_bar_newton_traces_the_closed_form_branch():
                                           and inc.displacement_norm <= 1e-9)
 
 
-def test_snap_back_is_traced_by_dissipation_control():
+# The snap-back bar's length moved in its last bits: the round-off another BLAS kernel gives
+# (issue 35: under SkylakeX the traced peak came out 1.4 % low, at 26.625 instead of 27, where
+# the steps happened to fall). The peak is located to the tolerance whatever the round-off.
+LAST_BITS = [0.0, -2.2e-16, 1e-13, -1e-13]
+
+
+@pytest.mark.parametrize("moved", LAST_BITS)
+def test_snap_back_is_traced_by_dissipation_control(moved):
     # (L - h)/E < h (eps_f - eps0)/f fails: the softening branch turns back in the end
     # displacement. Displacement control stalls at the peak; dissipation control follows the
     # snap-back (deflection and load falling together) down to the separated bar.
-    length, h, E, f, eps_f, area = 1000.0, 100.0, 30000.0, 0.9 * 3.0, 0.0003, 10.0
+    length, h, E, f, eps_f, area = 1000.0 * (1 + moved), 100.0, 30000.0, 0.9 * 3.0, 0.0003, 10.0
     problem, initial = newton_bar(length, 10, failure_strain=eps_f)
     steps = []
     with pytest.raises(ConvergenceError):  # the bar separates: no load can be carried
@@ -201,7 +208,8 @@ def test_a_path_that_no_longer_moves_stops_with_a_reason(monkeypatch):
     assert info.value.reason == "stagnation"
 
 
-def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections():
+@pytest.mark.parametrize("moved", LAST_BITS)
+def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections(moved):
     # The snap-back bar of the test above with analysis.on_snap_back: continue. Once the
     # traced snap-back has separated the bar, no control converges (the tangent is singular:
     # the weak element has lost all stiffness); a stroke-controlled test then records zero
@@ -209,7 +217,7 @@ def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections():
     # to the next deflection is a drop (drop.drop_step: committed viscous sub-steps) accepted
     # on the same tolerances: the closed form is P = 0, eps_xx = d / h in the weak element, 0
     # elsewhere.
-    length, h, f, eps_f, area = 1000.0, 100.0, 0.9 * 3.0, 0.0003, 10.0
+    length, h, f, eps_f, area = 1000.0 * (1 + moved), 100.0, 0.9 * 3.0, 0.0003, 10.0
     problem, initial = newton_bar(length, 10, failure_strain=eps_f)
     chosen = replace(newton_settings(0.2, 0.02, cuts=3), on_snap_back="continue")
     steps = list(follow_path(problem, chosen, initial))
@@ -220,21 +228,28 @@ def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections():
     assert P[peak] == pytest.approx(f * area, rel=1e-9)
     beyond = np.flatnonzero(d > d[peak] * (1 + 1e-9))
     beyond = beyond[beyond > peak]
-    assert beyond.size >= 3 and all(steps[i][0].snap_back for i in beyond)
-    assert np.all(np.abs(P[beyond]) <= 1e-6 * P[peak])
-    strain = steps[-1][0].evaluation.strain[:, :, 0]  # (elements, points)
-    assert np.allclose(strain[0], 0.2 / h, rtol=1e-6)  # the weak element at the loaded end
-    assert np.all(np.abs(strain[1:]) <= 1e-6 * 0.2 / h)
+    # the traced snap-back ends on the separated bar, and a drop takes it on from there (after
+    # it, displacement control at zero load or another drop: the same solution, as the
+    # round-off of the singular tangent decides)
+    separated = int(np.flatnonzero(np.abs(P) <= 1e-6 * P[peak])[0])
+    assert d[separated] == pytest.approx(h * eps_f, rel=1e-5)
+    assert steps[separated + 1][0].snap_back
+    assert beyond.size >= 3 and np.all(np.abs(P[beyond]) <= 1e-6 * P[peak])
+    for i in beyond:
+        strain = steps[i][0].evaluation.strain[:, :, 0]  # (elements, points)
+        assert np.allclose(strain[0], d[i] / h, rtol=1e-6)  # the weak element at the loaded end
+        assert np.all(np.abs(strain[1:]) <= 1e-6 * d[i] / h)
 
 
+@pytest.mark.parametrize("moved", LAST_BITS)
 @pytest.mark.parametrize("held", ["deflection", "stroke"])
-def test_without_tracing_the_snap_back_the_load_drops_at_the_peak_deflection(held):
+def test_without_tracing_the_snap_back_the_load_drops_at_the_peak_deflection(held, moved):
     # The snap-back bar without analysis.trace_snap_backs: past the peak deflection
     # d_p = L f / E = 0.09 mm the softening branch lies at smaller deflections only (it turns
     # back to h eps_f = 0.03 mm), so a stroke-controlled test drops at once to the separated
     # bar: P = 0 at every larger stroke, the weak element taking the whole stretch d / h. The
     # drop is taken by committed viscous sub-steps and must end on that closed form.
-    length, h, E, f, eps_f = 1000.0, 100.0, 30000.0, 0.9 * 3.0, 0.0003
+    length, h, E, f, eps_f = 1000.0 * (1 + moved), 100.0, 30000.0, 0.9 * 3.0, 0.0003
     problem, initial = newton_bar(length, 10, failure_strain=eps_f)
     # (held: the drop holds the control deflection, or the stroke under the load, here the
     # same displacement of the loaded end)

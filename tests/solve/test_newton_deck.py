@@ -48,10 +48,15 @@ def test_newton_elastic_steps_converge_tightly(tmp_path, interface):
 def test_newton_traces_cf4_through_its_peak_with_every_step_converged(tmp_path):
     """CF-4 under the converged scheme at its own limits (tolerances 1e-4, 40 iterations, 6
     step cuts: deck.analysis_options.SCHEME_DEFAULTS) with the blended mode rules and the kept
-    post-peak strengths, to 7.5 mm: every stored step an equilibrium within 1e-4 on both norms, none
-    jumped, and the peak icewall computed when docs/solver.md items 22 and 25 were measured
-    (6.25491 MPa at 6.976 mm; the same to the printed digits over round-off realizations,
-    OpenBLAS kernels and the NumPy/numba concrete kernels), within the issue's 0.3 %."""
+    post-peak strengths, to 7.5 mm: every stored step an equilibrium within 1e-4 on both norms,
+    none jumped, and its curve up to the first limit point (6.748 mm, located: docs/solver.md
+    item 35) as measured then (5.007841, 5.768175 and 6.187135 MPa at 5, 6 and 6.7 mm, the
+    same to the printed digits over two round-off realizations, the Haswell, Sandybridge and
+    Prescott kernels, the NumPy/numba concrete kernels and two predictor probes), within
+    0.1 %. Past that limit point the branch the static iteration follows depends on its own
+    decisions (6.25 or 6.31 MPa at 6.9-7.0 mm after a snap of up to 0.8 % of the load, item
+    35; the dynamic drops of issue 36 decide it by inertia): only the range of the peak is
+    asserted there."""
     from icewall.analysis.extract import stroke_curve
 
     loaded = load_deck(DECKS / "cf4.yaml", [
@@ -68,7 +73,9 @@ def test_newton_traces_cf4_through_its_peak_with_every_step_converged(tmp_path):
         assert not np.any(np.asarray(h["jumped"]))
         deflection, load = stroke_curve(np.asarray(h["control_displacement"]),
                                         np.asarray(h["load"]))
+    measured = np.interp([5.0, 6.0, 6.7], deflection, load)
+    assert measured == pytest.approx([5.007841, 5.768175, 6.187135], rel=1e-3)
     peak = int(np.argmax(load))
-    assert load[peak] == pytest.approx(6.25491, rel=3e-3)
-    assert deflection[peak] == pytest.approx(6.976, abs=0.1)
+    assert measured[-1] <= load[peak] <= 1.03 * measured[-1]
+    assert 6.7 <= deflection[peak] <= 7.2
     assert load[-1] < 0.97 * load[peak]  # past the peak: the wall softens
