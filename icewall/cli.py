@@ -345,7 +345,7 @@ def point(fc: float, h_c: float, path: str, formulation: str, steps: int, max_st
         raise click.BadParameter(str(exc) or type(exc).__name__) from None
     if csv_path == "-":
         result.to_csv(sys.stdout)
-    elif csv_path:
+    elif csv_path:  # through icewall.safe_write: no link followed, no other file replaced
         result.to_csv(csv_path)
     summary = result.summary()
     if as_json:
@@ -362,10 +362,11 @@ def point(fc: float, h_c: float, path: str, formulation: str, steps: int, max_st
 def schema(output: str | None) -> None:
     """Print the JSON Schema of the deck format (for editors)."""
     from icewall.deck.jsonschema import deck_json_schema
+    from icewall.safe_write import SCHEMA, write_text
 
     text = json.dumps(deck_json_schema(), indent=2) + "\n"
     if output:
-        Path(output).write_text(text)
+        write_text(output, text, SCHEMA)
     else:
         click.echo(text, nl=False)
 

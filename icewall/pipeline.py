@@ -5,7 +5,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -13,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from icewall import __version__
+from icewall import __version__, safe_write
 from icewall.deck.load import LoadedDeck
 from icewall.deck.profile import Profile
 from icewall.errors import ConvergenceError, ResultError
@@ -26,6 +25,7 @@ from icewall.results.probe import MechanismProbe, crushed_points, yielded_points
 from icewall.results.reader import open_result
 from icewall.results.writer import (
     PARTIAL_SUFFIX,
+    RESULT,
     ResultWriter,
     StepRecord,
     check_writable,
@@ -161,8 +161,8 @@ def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
     check_writable(path)  # before any computing
     with OutputLock(path) as lock:
         refuse_output_links(str(path))
-        if replace and path.exists():
-            os.remove(path)  # a rerun: no stale result if this one fails
+        if replace:  # a rerun: no stale result if this one fails (an icewall result only)
+            safe_write.remove(path, RESULT)
         return _run_locked(loaded, path, lock, progress, resume, attrs or {})
 
 

@@ -56,6 +56,7 @@ from icewall.analysis.reference import find_reference
 from icewall.deck.load import load_deck_text
 from icewall.errors import IcewallError, ResultError
 from icewall.results.reader import open_result
+from icewall.safe_write import BASELINE, write_text
 
 PEAK_TOL = 0.03
 RESIDUAL_TOL = 0.10
@@ -208,7 +209,8 @@ def make_baseline(records: Mapping[str, dict], *, command: str, peak_tol: float 
 
 
 def write_baseline(path: str | os.PathLike, data: dict) -> None:
-    """Write baseline data as YAML with a comment header (atomically)."""
+    """Write baseline data as YAML with a comment header (atomically, through safe_write:
+    never through a link, never over a file that is not a baseline)."""
     head = [
         "# icewall compare baseline: peak and residual loads per run (units: the run's load",
         "# measure, w in MPa for CF, total load in N for TF/VTT; deflections in mm).",
@@ -227,9 +229,7 @@ def write_baseline(path: str | os.PathLike, data: dict) -> None:
                                             width=100)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    write_text(path, text, BASELINE)
 
 
 # -- the comparison ----------------------------------------------------------------------------

@@ -57,6 +57,7 @@ from icewall.analysis.baseline import (  # noqa: F401  (re-exported: the public 
     write_baseline,
 )
 from icewall.errors import IcewallError, ResultError
+from icewall.safe_write import BASELINE, check_replaceable
 
 # A figure is gated only where its band spans at most this fraction of its tolerance: a band
 # of ten realizations that already spans nearly the tolerance does not bound the next platform.
@@ -279,6 +280,8 @@ def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.Path
     if not records:
         raise ResultError(f"no result files (*.h5) in {results_dir}")
     old = None
+    if update:  # refused before anything is read or written: a link, a file not a baseline
+        check_replaceable(baseline_path, BASELINE)
     if not update or Path(baseline_path).exists():
         old = read_baseline(baseline_path)
     stated = (old or {}).get("tolerances") or {}

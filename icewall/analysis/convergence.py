@@ -32,6 +32,7 @@ curve) and, with matplotlib, convergence.png (error against CPU time, log-log, o
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 import time
@@ -50,6 +51,8 @@ from icewall.deck.load import load_deck
 from icewall.deck.yamlsrc import read_yaml
 from icewall.errors import DeckError, ResultError
 from icewall.results.reader import open_result
+from icewall.results.writer import RESULT
+from icewall.safe_write import MARK, PNG, csv_kind, open_existing, open_for_write, write_bytes
 
 DEFAULT_LADDER = {"families": {
     "element_size": {"keys": "analysis.element_size", "values": [150, 100, 75, 50, 37.5],
@@ -71,6 +74,12 @@ COLUMNS = ("family", "value", "h", "run", "status", "stop_reason", "cpu_s", "wal
            "err_residual", "err_curve", "rich_err_peak", "rich_err_first_peak",
            "rich_err_residual", "test_err_peak", "test_err_first_peak", "test_err_residual",
            "total_err_peak", "total_err_first_peak", "total_err_residual", "total_err_curve")
+OUTPUTS = {  # what the study writes into its directory, and how an earlier one is recognised
+    "convergence_runs.csv": csv_kind("convergence table", COLUMNS),
+    "convergence_families.csv": csv_kind("convergence table", ("family", "reference")),
+    "convergence_pareto.csv": csv_kind("convergence table", ("threshold", "quantity")),
+    "convergence_curves.csv": csv_kind("convergence table", ("run", "deflection")),
+    "convergence.png": PNG}
 
 
 @dataclass(frozen=True)
@@ -167,10 +176,10 @@ def run_timed(job: Job) -> dict:
     start = time.process_time()
     out = run_job(job)
     out["cpu_time_s"] = time.process_time() - start
-    if out["status"] in FINISHED:
+    if out["status"] in FINISHED:  # in place, never through a link (safe_write)
         import h5py
 
-        with h5py.File(out["path"], "a") as f:
+        with open_existing(out["path"], RESULT) as handle, h5py.File(handle, "a") as f:
             f.attrs["cpu_time_s"] = out["cpu_time_s"]
     return out
 
@@ -253,9 +262,10 @@ def _cell(value) -> str:
 
 
 def write_tables(outdir: str, rows: list[dict], families: dict, pareto: list[dict]) -> None:
-    """The four CSV tables (module docstring); empty cells for no value."""
+    """The four CSV tables (module docstring); empty cells for no value; through safe_write
+    (never through a link, never over a file that is not that table)."""
     def write(name: str, fields, records) -> None:
-        with open(os.path.join(outdir, name), "w", newline="") as f:
+        with open_for_write(os.path.join(outdir, name), OUTPUTS[name]) as f:
             writer = csv.writer(f)
             writer.writerow(fields)
             writer.writerows([_cell(r.get(c)) for c in fields] for r in records)
@@ -303,8 +313,10 @@ def plot(path: str, rows: list[dict], title: str) -> bool:
     handles = [plt.Line2D([], [], color=f"C{i}", marker="o") for i in range(len(families))]
     fig.legend(handles, families, loc="outside right center", fontsize="small")
     fig.suptitle(title)
-    fig.savefig(path, dpi=80)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=80, metadata={"Software": MARK})
     plt.close(fig)
+    write_bytes(path, buffer.getvalue(), PNG)
     return True
 
 
@@ -343,7 +355,7 @@ def convergence_command(deck: str, ladder: str | None = None, quick: bool = Fals
     outdir = outdir or os.path.join("results", "convergence", Path(deck).stem)
     levels, base, residual_at = build_jobs(deck, families, overrides, outdir)
     jobs = list({lv["job"].name: lv["job"] for lv in levels}.values())
-    make_output_directory(outdir)
+    make_output_directory(outdir, OUTPUTS)
     results: dict[str, dict] = {}
     todo = []
     for job in jobs:

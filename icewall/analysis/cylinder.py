@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from icewall.analysis.cylinder_model import CylinderCase, run_cylinder
+from icewall.errors import ResultError
+from icewall.safe_write import check_replaceable, csv_kind, open_for_write
 
 THESIS_ALPHA_C = 0.00478  # 1/mm, eq. A.7a
 THESIS_N = 0.80  # eq. A.7b
@@ -88,6 +90,9 @@ class StudyRow:
     @property
     def completed(self) -> bool:
         return not self.stopped
+
+
+STUDY_TABLE = csv_kind("cylinder study table", [f.name for f in fields(StudyRow)])
 
 
 def table_a1_cases(fcs: Iterable[float] | None = None, meshes: Iterable[str] | None = None
@@ -174,8 +179,9 @@ def read_csv(path: str | Path) -> list[StudyRow]:
 
 
 def write_csv(rows: Sequence[StudyRow], path: str | Path) -> None:
+    """The study table, through safe_write (never through a link, never over another file)."""
     names = [f.name for f in fields(StudyRow)]
-    with open(path, "w", newline="") as handle:
+    with open_for_write(path, STUDY_TABLE) as handle:
         writer = csv.DictWriter(handle, fieldnames=names)
         writer.writeheader()
         for row in rows:
@@ -231,7 +237,8 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
+        check_replaceable(out / "cylinder_study.csv", STUDY_TABLE)
+    except (OSError, ResultError) as exc:
         print(f"error: cannot create {out}: {exc}", file=sys.stderr)
         return 2
     specs = table_a1_cases(args.fc, args.mesh)

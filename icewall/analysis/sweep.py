@@ -26,7 +26,7 @@ import math
 import os
 import re
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
 import yaml
@@ -34,6 +34,8 @@ import yaml
 from icewall.analysis.sweep_runners import Job, run_dask, run_local
 from icewall.analysis.sweep_table import (
     BAND_COLUMNS,
+    TABLE,
+    TABLES,
     band_rows,
     build_rows,
     format_bands,
@@ -48,6 +50,7 @@ from icewall.deck.yamlsrc import load_yaml
 from icewall.errors import DeckError, Interrupted, ResultError
 from icewall.pipeline import run_stamp
 from icewall.results.reader import open_result
+from icewall.safe_write import Kind, check_replaceable
 
 FINISHED = ("completed", "stopped")
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
@@ -358,9 +361,14 @@ def _write_tables(jobs: list[Job], results: dict[str, dict], outdir: str, realiz
     return rows, table
 
 
-def make_output_directory(outdir: str | os.PathLike) -> None:
-    """Create `outdir` (and parents), or raise ResultError saying why not."""
+def make_output_directory(outdir: str | os.PathLike,
+                          tables: Mapping[str, Kind] | None = None) -> None:
+    """Create `outdir` (and parents), or raise ResultError saying why not; a table (file name
+    -> Kind, default the sweep's) the study would end by writing over a link or a file icewall
+    did not write is refused up front (icewall.safe_write)."""
     try:
         os.makedirs(outdir, exist_ok=True)
     except OSError as exc:
         raise ResultError(f"cannot create the output directory {outdir}: {exc}") from None
+    for name, kind in (dict.fromkeys(TABLES, TABLE) if tables is None else tables).items():
+        check_replaceable(os.path.join(outdir, name), kind)

@@ -31,6 +31,7 @@ from icewall.analysis.mechanism import mechanism_check
 from icewall.analysis.reference import find_reference
 from icewall.deck.load import load_deck
 from icewall.results.reader import open_result
+from icewall.safe_write import csv_kind, open_for_write
 
 RESIDUAL_AT = 40.0  # mm
 RATIOS = {  # column -> (reference field, our measure)
@@ -49,6 +50,8 @@ _CSV_ONLY = ("reason", "residual_mechanism")
 _HEADERS = {"peak_deflection": "defl@peak", "residual_40": "res@40mm", "run_time_s": "time_s",
             "n_steps": "steps", "ductility_ratio": "mu", "energy_Nmm": "energy_Nmm"}
 _SCALE = {"N": 1.0, "kN": 1e3, "MN": 1e6, "MPa": 1.0, "N/mm2": 1.0}
+TABLE = csv_kind("sweep table", COLUMNS)  # sweep_summary.csv and sweep_realizations.csv
+TABLES = ("sweep_summary.csv", "sweep_realizations.csv")
 
 
 def _measures(path: str) -> dict:
@@ -173,8 +176,9 @@ def _stat_rows(stats) -> list[dict]:
 
 def write_csv(path: str | os.PathLike, rows: list[dict], stats,
               columns: tuple[str, ...] = COLUMNS) -> None:
-    """Rows, then a `mean` and a `cov` row (ratio columns only); empty cells for no value."""
-    with open(path, "w", newline="") as f:
+    """Rows, then a `mean` and a `cov` row (ratio columns only); empty cells for no value.
+    Written through icewall.safe_write: never through a link, never over another file."""
+    with open_for_write(path, TABLE) as f:
         writer = csv.DictWriter(f, fieldnames=columns)
         writer.writeheader()
         for row in rows + _stat_rows(stats):

@@ -91,8 +91,10 @@ class PointResult:
                                  self.equivalent_uniaxial_strain, self.secant_modulus,
                                  self.poisson_ratio, self.cracked_in_plane,
                                  self.cracked_out_of_plane, self.crushed, self.iterations])
-        if isinstance(file, (str, Path)):
-            with open(file, "w", newline="") as handle:
+        if isinstance(file, (str, Path)):  # never through a link, never over another file
+            from icewall.safe_write import csv_kind, open_for_write
+
+            with open_for_write(file, csv_kind("material-point table", header)) as handle:
                 self._write(handle, header, table)
         else:
             self._write(file, header, table)

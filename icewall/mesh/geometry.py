@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from icewall.errors import MeshError
+from icewall.errors import MeshError, ResultError
 from icewall.mesh.convert import from_gmsh, gmsh_type, orient_counter_clockwise
 from icewall.mesh.layout import Layout
+from icewall.safe_write import MSH, library_output
 
 
 def mesh_layout(layout: Layout, cell_type: str, model_name: str = "wall",
@@ -36,10 +37,11 @@ def mesh_layout(layout: Layout, cell_type: str, model_name: str = "wall",
         gmsh.model.mesh.generate(2)
         if cell_type == "quad8":
             gmsh.model.mesh.setOrder(2)
-        if msh_path is not None:
-            gmsh.write(msh_path)
+        if msh_path is not None:  # through safe_write: no link followed, no file replaced
+            with library_output(msh_path, MSH) as name:
+                gmsh.write(name)
         return _extract(gmsh, cell_type, surfaces, region_names)
-    except MeshError:
+    except (MeshError, ResultError):
         raise
     except Exception as exc:  # gmsh raises plain Exception
         raise MeshError(f"gmsh failed: {exc}") from exc

@@ -9,8 +9,26 @@ import numpy as np
 from icewall.fem.kinematics import gauss_point_spacing
 from icewall.mesh.convert import EDGE_TABLE, meshio_name, to_meshio
 from icewall.mesh.mesh import Mesh
+from icewall.safe_write import HDF5_MAGIC, MSH, VTU, XDMF, Kind, library_output
 
 FORMATS = {"msh": ("gmsh22", ".msh"), "vtu": ("vtu", ".vtu"), "xdmf": ("xdmf", ".xdmf")}
+KINDS = {"msh": MSH, "vtu": VTU, "xdmf": XDMF}  # how an earlier one is recognised (safe_write)
+
+
+def _is_xdmf_data(path: str) -> bool:
+    """Whether `path` is the heavy-data HDF5 file meshio writes beside an .xdmf (datasets
+    data0, data1, ... and nothing else; never an icewall result)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            return bool(len(f)) and not f.attrs and all(
+                k.startswith("data") and k[4:].isdigit() for k in f)
+    except Exception:  # noqa: BLE001 - unreadable: not recognised, so not replaced
+        return False
+
+
+XDMF_DATA = Kind("XDMF heavy-data file", starts=HDF5_MAGIC, check=_is_xdmf_data)
 
 
 def to_meshio_mesh(mesh: Mesh, gmsh_tags: bool = False, sets: bool = True):
@@ -56,7 +74,10 @@ def write_mesh(mesh: Mesh, stem: str | Path, formats: list[str]) -> list[Path]:
         path = stem.with_suffix(suffix)
         kwargs = {"binary": False} if fmt == "msh" else {}
         m = to_meshio_mesh(mesh, gmsh_tags=fmt == "msh", sets=fmt != "xdmf")
-        meshio.write(path, m, file_format=file_format, **kwargs)
+        # meshio writes the heavy data of an .xdmf beside it as STEM.h5
+        companions = {path.with_suffix(".h5").name: XDMF_DATA} if fmt == "xdmf" else {}
+        with library_output(path, KINDS[fmt], companions) as name:
+            meshio.write(name, m, file_format=file_format, **kwargs)
         written.append(path)
     return written
 

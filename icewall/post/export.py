@@ -27,6 +27,15 @@ import numpy as np
 from icewall.errors import ResultError
 from icewall.mesh.convert import meshio_name, to_meshio
 from icewall.results.reader import open_result
+from icewall.safe_write import (
+    MARK,
+    PVD,
+    VTU,
+    check_replaceable,
+    library_output,
+    own_directory,
+    write_text,
+)
 
 COMPONENTS = {"stress": ("xx", "yy", "zz", "xy"), "strain": ("xx", "yy", "zz", "xy")}
 FLAG_GROUPS = {"cracked_in_plane_fraction": (0, 1), "cracked_out_of_plane_fraction": (2,),
@@ -72,10 +81,11 @@ def default_output(result_path: str | Path) -> Path:
 
 
 def write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
-    """A ParaView collection file: (time, relative .vtu path) per step."""
+    """A ParaView collection file: (time, relative .vtu path) per step (safe_write)."""
     rows = "\n".join(f'    <DataSet timestep="{t:.17g}" part="0" file="{f}"/>' for t, f in entries)
-    path.write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                    f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
+    write_text(path, '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+               f"<!-- written by {MARK} -->\n"
+               f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n", PVD)
 
 
 def export_vtu_series(result_path: str | Path, out: str | Path | None = None,
@@ -88,6 +98,7 @@ def export_vtu_series(result_path: str | Path, out: str | Path | None = None,
     if out.suffix != ".pvd":
         raise ResultError(f"export writes a .pvd collection (with a folder of .vtu), not {out}")
     folder = out.with_suffix("")
+    check_replaceable(out, PVD)  # refused before anything is written
     with open_result(result_path) as r:  # a bad result file leaves no folder behind
         mesh, h = r.mesh, r.history
         if not r.steps:
@@ -97,7 +108,7 @@ def export_vtu_series(result_path: str | Path, out: str | Path | None = None,
             warn(f"{result_path}: step(s) {', '.join(map(str, missing[:10]))} should store "
                  f"fields but the file lacks them (damaged?); exported the {len(r.steps)} "
                  "stored")
-        folder.mkdir(parents=True, exist_ok=True)
+        own_directory(folder, "folder of .vtu files")
         row = {int(s): i for i, s in enumerate(h["step"])}
         defl = np.array([h["control_displacement"][row[s]] for s in r.steps])
         by_deflection = bool(np.all(np.diff(defl) > 0))
@@ -117,8 +128,9 @@ def export_vtu_series(result_path: str | Path, out: str | Path | None = None,
                 for key, values in cell_fields(name, r.gauss(step, name)).items():
                     cell_data[key] = [values]
             vtu = folder / f"step_{step:05d}.vtu"
-            meshio.write(vtu, meshio.Mesh(points, cells, point_data=point_data,
-                                          cell_data=cell_data), file_format="vtu")
+            with library_output(vtu, VTU) as name:
+                meshio.write(name, meshio.Mesh(points, cells, point_data=point_data,
+                                               cell_data=cell_data), file_format="vtu")
             entries.append((float(t), f"{folder.name}/{vtu.name}"))
     write_pvd(out, entries)
     return out, "control deflection (mm)" if by_deflection else "step number"

@@ -21,6 +21,7 @@ from icewall.post.curves import plot_curves, reference_loads
 from icewall.post.figures import pyplot
 from icewall.post.patterns import plot_cracks
 from icewall.results.reader import open_result
+from icewall.safe_write import MARK, REPORT, write_text
 
 RESIDUAL_AT = 40.0  # mm
 PATTERNS_AT = ("peak", RESIDUAL_AT)
@@ -164,9 +165,10 @@ def build_report(paths: list[str | Path], out: str | Path, title: str | None = N
     for p in paths:
         parts += _patterns(p)
     page = (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+            f'<meta name="generator" content="{MARK}">'
             f"<title>{html.escape(title)}</title><style>{CSS}</style></head><body>\n"
             + "\n".join(parts) + "\n</body></html>\n")
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(page, encoding="utf-8")
+    write_text(out, page, REPORT)  # never through a link, never over another file
     return out

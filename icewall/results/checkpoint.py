@@ -12,10 +12,12 @@ import zipfile
 
 import numpy as np
 
+from icewall import safe_write
 from icewall.errors import ResultError
 from icewall.results.output_safety import DiskFullError, ensure_space, is_disk_full, refuse_symlink
 
 CHECKPOINT_SUFFIX = ".checkpoint.npz"
+CHECKPOINT = safe_write.Kind("checkpoint", starts=b"PK\x03\x04")  # an .npz is a zip file
 
 
 def checkpoint_path(result_path: str | os.PathLike) -> str:
@@ -25,8 +27,9 @@ def checkpoint_path(result_path: str | os.PathLike) -> str:
 
 def write_checkpoint(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -> None:
     """Replace the checkpoint at `path` by `arrays` (names may contain '/'). The temporary is
-    created exclusively and never through a link; on a full disk it is removed, the previous
-    checkpoint stays and DiskFullError is raised."""
+    created exclusively and never through a link, and replaces only a checkpoint
+    (safe_write.commit); on a full disk it is removed, the previous checkpoint stays and
+    DiskFullError is raised."""
     path = os.fspath(path)
     tmp = path + ".tmp"
     arrays = {name: np.asarray(a) for name, a in arrays.items()}
@@ -37,7 +40,10 @@ def write_checkpoint(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -> 
     try:
         with os.fdopen(os.open(tmp, flags, 0o644), "wb") as fh:
             np.savez(fh, **arrays)
-        os.replace(tmp, path)
+        safe_write.commit(tmp, path, CHECKPOINT)
+    except ResultError:
+        remove_checkpoint_temporary(tmp)
+        raise
     except OSError as exc:
         remove_checkpoint_temporary(tmp)
         if is_disk_full(exc):

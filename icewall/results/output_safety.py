@@ -5,7 +5,8 @@ links, no HDF5 write on a full disk.
   without following links), taken before anything of a run is opened for writing; a second run
   on the same output is refused, and the lock vanishes with its holder (no stale locks).
 * ``refuse_symlink``: the ``.partial``, final, lock and checkpoint paths must not be symbolic
-  links (a link planted in a shared directory would make icewall overwrite its target).
+  links (a link planted in a shared directory would make icewall overwrite its target); the
+  rule of every output, icewall.safe_write, which also writes the final file and checkpoint.
 * ``ensure_space``: HDF5 cannot recover from a failed write (the file cannot be closed cleanly
   after it, h5py 3 crashes), so every step checks the free space first and stops with
   ``DiskFullError`` while the file still holds every converged step and can be closed.
@@ -18,6 +19,7 @@ import os
 import stat
 
 from icewall.errors import IcewallError, ResultError
+from icewall.safe_write import refuse_link
 
 LOCK_SUFFIX = ".lock"
 FREE_FLOOR = 1 << 20  # bytes left free after a step: room to record the outcome and close
@@ -37,9 +39,7 @@ class DiskFullError(IcewallError):
 
 def refuse_symlink(path: str | os.PathLike, what: str = "output") -> None:
     """Raise ResultError if `path` is a symbolic link (icewall writes through none)."""
-    if os.path.islink(path):
-        raise ResultError(f"refusing to write the {what} through the symbolic link {path} "
-                          f"(-> {os.readlink(path)}); remove it or choose another output")
+    refuse_link(path, what)
 
 
 def free_bytes(directory: str | os.PathLike) -> int:
@@ -117,6 +117,12 @@ class OutputLock:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             os.close(fd)
             raise ResultError(f"cannot lock {self.result_path}: {self.path} is not a file")
+        held = os.pread(fd, 64, 0).strip()
+        if held and not held.isdigit():  # a lock holds its holder's pid, or nothing yet
+            os.close(fd)
+            raise ResultError(f"refusing to use {self.path} as the lock of {self.result_path}: "
+                              "it is not a lock file icewall wrote; remove it or choose "
+                              "another output")
         return fd
 
     def _lock(self, fd: int) -> bool:

@@ -22,6 +22,7 @@ import h5py
 import numpy as np
 
 import icewall
+from icewall import safe_write
 from icewall.errors import ResultError
 from icewall.mesh.mesh import Mesh
 from icewall.results.checkpoint import checkpoint_path, remove_checkpoint, write_checkpoint
@@ -49,6 +50,22 @@ RESERVED_ATTRS = ("format", "format_version", "software_version", "units", "leng
                   "n_steps", "resumed_at")
 GAUSS_UNITS = {"stress": "MPa", "strain": "1"}
 STEP_COMPRESSION: dict = {}  # e.g. {"compression": "lzf"}; see docs/hdf5_layout.md (none chosen)
+
+
+def _is_result(path: str) -> bool:
+    """Whether `path` is an HDF5 file with icewall's format attribute."""
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            return f.attrs.get("format") in (FORMAT, FORMAT.encode())
+    except Exception:  # noqa: BLE001 - unreadable: not recognised, so not replaced
+        return False
+
+
+RESULT = safe_write.Kind("result file", starts=safe_write.HDF5_MAGIC, check=_is_result)
+"""A final result (NAME.h5) is replaced only by a run's own file over an icewall result."""
+PARTIAL = safe_write.Kind("partial result", starts=safe_write.HDF5_MAGIC, empty_ok=True)
+"""A dead run's NAME.h5.partial (an HDF5 file, or empty if it died creating it) is removed
+by the next run; anything else there is refused."""
 
 
 def _write_mesh(g: h5py.Group, mesh: Mesh) -> None:
@@ -95,8 +112,9 @@ def _exit_without_hdf5_shutdown() -> None:
 
 
 def refuse_output_links(path: str) -> None:
-    """ResultError if the final, ``.partial`` or checkpoint path of `path` is a symbolic link."""
-    refuse_symlink(path, "result")
+    """ResultError if the final, ``.partial`` or checkpoint path of `path` is a symbolic link,
+    or the final path a file that is not an icewall result (safe_write)."""
+    safe_write.check_replaceable(path, RESULT)
     refuse_symlink(path + PARTIAL_SUFFIX, "partial result")
     refuse_symlink(checkpoint_path(path), "checkpoint")
 
@@ -157,8 +175,7 @@ class ResultWriter:
         run's and is removed first; a link is refused, never followed)."""
         refuse_output_links(self.path)
         ensure_space(self.partial_path, size, "the new result file")
-        if os.path.lexists(self.partial_path):
-            os.remove(self.partial_path)
+        safe_write.remove(self.partial_path, PARTIAL)
         try:
             return h5py.File(self.partial_path, "x")
         except OSError as exc:
@@ -340,7 +357,11 @@ class ResultWriter:
             if status == "failed" or self._broken:  # keeps the checkpoint: `--resume`
                 return self.partial_path
             remove_checkpoint(checkpoint_path(self.path))
-            os.replace(self.partial_path, self.path)  # replaces a link, never writes through
+            try:  # replaces an icewall result or a link, never writes through one
+                safe_write.commit(self.partial_path, self.path, RESULT)
+            except ResultError as exc:
+                raise ResultError(f"{exc}; the finished result is kept in "
+                                  f"{self.partial_path}") from None
             return self.path
         finally:
             self._release()
