@@ -277,7 +277,8 @@ def summary(result: str, as_json: bool) -> None:
 
     with damaged_result(result):
         data = summarize(result)
-        text = json.dumps(data, indent=2) if as_json else format_summary(data)
+        text = (json.dumps(data, indent=2, allow_nan=False) if as_json  # valid JSON only
+                else format_summary(data))
     click.echo(text)
 
 

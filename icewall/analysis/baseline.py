@@ -40,7 +40,6 @@ The tolerances of the header: `peak`, `curve` (relative, beyond the bands) and `
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import textwrap
@@ -51,10 +50,10 @@ from pathlib import Path
 import yaml
 
 from icewall import __version__
+from icewall.analysis.baseline_check import read_baseline  # noqa: F401 (re-exported)
 from icewall.analysis.extract import extract
 from icewall.analysis.reference import find_reference
-from icewall.deck.load import load_deck_text
-from icewall.errors import IcewallError, ResultError
+from icewall.errors import ResultError
 from icewall.results.reader import open_result
 from icewall.safe_write import BASELINE, write_text
 
@@ -100,16 +99,12 @@ def measure(path: str | os.PathLike) -> dict:
     import h5py
 
     with open_result(path) as res:
-        attrs, text, status = res.attrs, res.deck_text, res.status
+        attrs, status, overrides = res.attrs, res.status, res.overrides
+        stored = res.stored_deck()  # None: no target deflection (the reader's rule)
     with h5py.File(path, "r") as f:
         deck_path = f["deck"].attrs.get("path", "")
     deck_path = deck_path.decode() if isinstance(deck_path, bytes) else str(deck_path)
-    overrides = json.loads(attrs.get("deck_overrides") or attrs.get("sweep_overrides") or "[]")
-    try:
-        target = float(load_deck_text(text, deck_path or "<deck>", overrides)
-                       .deck.loads.control.target)
-    except IcewallError:
-        target = None
+    target = None if stored is None else float(stored.deck.loads.control.target)
     points = curve_deflections(attrs.get("specimen"))
     fig = extract(path, residual_deflection=target if target is not None else 40.0,
                   curve_deflections=points)
@@ -150,20 +145,6 @@ def measure_results(results) -> dict[str, dict]:
 
 
 # -- the baseline file -------------------------------------------------------------------------
-def read_baseline(path: str | os.PathLike) -> dict:
-    """Read a baseline file (raises ResultError if it is missing or malformed)."""
-    try:
-        data = yaml.safe_load(Path(path).read_text())
-    except OSError as exc:
-        raise ResultError(f"cannot read the baseline {path}: {exc.strerror} "
-                          "(write one with --update)") from None
-    except yaml.YAMLError as exc:
-        raise ResultError(f"{path}: YAML syntax error: {exc}") from None
-    if not isinstance(data, dict) or not isinstance(data.get("runs"), dict):
-        raise ResultError(f"{path}: not a baseline file (no 'runs' mapping)")
-    return data
-
-
 def realization_bands(realizations: list[dict]) -> dict:
     """What the round-off realizations of one run (the run itself among them) span: their
     statuses, and the [min, max] band of the peak and of the residual load over those that
@@ -234,10 +215,14 @@ def write_baseline(path: str | os.PathLike, data: dict) -> None:
 
 # -- the comparison ----------------------------------------------------------------------------
 def _test_ratio(record: dict) -> float | None:
-    """Test / predicted ultimate load of one record (None: no test value or no peak)."""
+    """Test / predicted ultimate load of one record (None: no test value, or no peak: a run
+    that never peaked, its load still rising at its end, has no ultimate load to compare and
+    stays out of the mean, as in icewall sweep's table)."""
     ref = find_reference(record.get("specimen") or "")
     peak, unit = record.get("peak_load"), record.get("unit")
     if ref is None or ref.ultimate_test is None or not peak or peak <= 0:
+        return None
+    if record.get("peaked") is not True:
         return None
     if unit and unit != ref.unit:  # reference values are in icewall's measure (MPa or N)
         return None

@@ -257,6 +257,21 @@ def format_report(report: CompareReport) -> str:
 
 
 # -- the command -------------------------------------------------------------------------------
+def refuse_failing_baseline(records: Mapping[str, dict], new: dict, path) -> None:
+    """ResultError (nothing written) unless the baseline `new`, made from `records`, passes
+    against those same records: one that fails at once (the mean test/predicted ratio outside
+    the band it records) describes nothing."""
+    tol = new["tolerances"]
+    report = compare(records, new, tol["peak"], tol["residual"], tuple(tol["ratio_band"]),
+                     tol["curve"])
+    if not report.passed:
+        why = "; ".join(f"{r.run} {r.quantity}: {_cell(r.now)} ({r.note})"
+                        for r in report.failures)
+        raise ResultError(f"not writing {path}: it would fail against the results it is made "
+                          f"from ({why}); give the band or tolerances that hold them "
+                          "(--band LO HI, --peak-tol, --residual-tol)")
+
+
 def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.PathLike,
                     update: bool = False, peak_tol: float | None = None,
                     residual_tol: float | str | None = FROM_HEADER,
@@ -305,10 +320,11 @@ def compare_command(results_dir: str | os.PathLike, baseline_path: str | os.Path
             import sys
 
             command = "icewall " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-        write_baseline(baseline_path, make_baseline(records, command=command, peak_tol=peak_tol,
-                                                    residual_tol=residual_tol, ratio_band=band,
-                                                    curve_tol=curve_tol,
-                                                    realizations=realizations))
+        new = make_baseline(records, command=command, peak_tol=peak_tol,
+                            residual_tol=residual_tol, ratio_band=band, curve_tol=curve_tol,
+                            realizations=realizations)
+        refuse_failing_baseline(records, new, baseline_path)
+        write_baseline(baseline_path, new)
         echo(f"baseline {baseline_path} written: {len(records)} run(s)")
         return 0
     return status

@@ -28,8 +28,6 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from icewall.analysis.extract import stroke_curve
-from icewall.deck.load import load_deck_text
-from icewall.errors import IcewallError
 from icewall.model.loads import jack_count, load_measure
 
 REQUIRED_RATIO = 6.0  # clause 8.4.4: six times the yield deflection
@@ -123,22 +121,18 @@ def csa_ductility(deflection, load, *, origin: float = 0.0, initial_points: int 
                      "run further", yield_load=py, yield_deflection=dy, **common)
 
 
-def energy_factor(deck_text: str, deck_path: str, overrides: list[str]) -> float | None:
-    """Total jack load (N) per unit of the reported load measure, from the stored deck (w:
-    n_jacks b L_trib; total load: 1); None when the deck cannot be read."""
-    try:
-        deck = load_deck_text(deck_text, deck_path, overrides).deck
-    except (IcewallError, ValueError, TypeError, KeyError):
+def energy_factor(stored) -> float | None:
+    """Total jack load (N) per unit of the reported load measure, from the stored deck (a
+    LoadedDeck; w: n_jacks b L_trib; total load: 1); None when it does not load (None)."""
+    if stored is None:
         return None
-    return jack_count(deck) / load_measure(deck)[2]
+    return jack_count(stored.deck) / load_measure(stored.deck)[2]
 
 
 def result_ductility(result) -> dict:
     """Clause 8.4.4 check of an open ResultFile's curve (the displacement-control steps from
     the end of any preload, as icewall.analysis.extract defines it), as a JSON-ready dict with
     the energy also in N mm of the total jack load where the deck gives the loaded area."""
-    import json
-
     h = result.history
     d, p = np.asarray(h["control_displacement"], float), np.asarray(h["load"], float)
     control = np.ones(d.size, bool)
@@ -153,8 +147,7 @@ def result_ductility(result) -> dict:
         return {"verdict": "undecided", "message": f"cannot check this curve: {exc}"}
     unit = result.attrs.get("load_unit") or "load unit"
     out["energy_unit"] = f"{unit} mm"
-    overrides = json.loads(result.attrs.get("deck_overrides") or "[]")
-    factor = energy_factor(result.deck_text, result.path, overrides)
+    factor = energy_factor(result.stored_deck())
     for key in ("energy", "energy_to_required"):
         out[f"{key}_Nmm"] = None if factor is None or out[key] is None else out[key] * factor
     return out

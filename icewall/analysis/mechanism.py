@@ -39,7 +39,6 @@ import os
 import numpy as np
 
 from icewall.analysis.extract import control_curve, extract
-from icewall.deck.load import load_deck_text
 from icewall.results.probe import (
     PLATE_COLUMNS,
     SECTION_COLUMN,
@@ -64,13 +63,12 @@ def thesis_plate_statement(specimen: str | None) -> bool | None:
 
 # -- the check of a result file -----------------------------------------------------------------
 def _yield_stress(result) -> float | None:
-    import json
-
-    try:
-        overrides = json.loads(result.attrs.get("deck_overrides", "[]"))
-        steel = load_deck_text(result.deck_text, overrides=overrides).deck.materials.steel
-    except Exception:  # noqa: BLE001 - an unreadable deck gives no f_y, not a failed check
+    """f_y of the plates from the stored deck (None where it no longer loads: the reader's
+    rule, results.reader.ResultFile.stored_deck)."""
+    loaded = result.stored_deck()
+    if loaded is None:
         return None
+    steel = loaded.deck.materials.steel
     return steel.fy * (1.0 - steel.fy_reduction)
 
 
@@ -253,13 +251,18 @@ def format_mechanism(check: dict) -> list[tuple[str, str]]:
         lines.append(("bottom plate at peak", (
             f"{check['stress_mid']:.4g} MPa = {ratio('mid_over_fy')} f_y at midspan, max "
             f"{check['stress_max']:.4g} MPa = {ratio('max_over_fy')} f_y at x "
-            f"{check['stress_max_x']:.0f} mm (f_y {check['f_y']:.4g}; {check['source']})")))
+            f"{check['stress_max_x']:.0f} mm ({_f_y(check)}; {check['source']})")))
     else:
         lines.append(("bottom plate at peak", str(check.get("source") or "-")))
     lines.append(("bottom plate yielded", _yield_text(check)))
     lines.append(("first crushing", _first_crushing_text(check.get("first_crushing"))))
     lines.append(("residual mechanism", check.get("residual_mechanism") or "-"))
     return lines
+
+
+def _f_y(check: dict) -> str:
+    f_y = check.get("f_y")
+    return "f_y unknown: the stored deck does not load" if f_y is None else f"f_y {f_y:.4g}"
 
 
 def _first_crushing_text(first: dict | None) -> str:

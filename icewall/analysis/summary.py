@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import json
+import math
 import os
 
 import numpy as np
@@ -11,8 +11,7 @@ from icewall.analysis.ductility import result_ductility
 from icewall.analysis.extract import FIRST_PEAK_SOFTENING, first_maximum, stroke_mask
 from icewall.analysis.mechanism import format_mechanism, mechanism_check
 from icewall.deck.analysis_options import CONVERGED_TOLERANCE
-from icewall.deck.load import load_deck_text
-from icewall.errors import DeckError
+from icewall.deck.load import LoadedDeck
 from icewall.results.reader import open_result
 
 _NO_FINISH = "no finish record: run still going, or killed"
@@ -33,8 +32,8 @@ def summarize(path: str | os.PathLike) -> dict:
     """Key numbers of one analysis as a JSON-serialisable dict (None where there are no steps)."""
     with open_result(path) as r:
         a, h = r.attrs, r.history
-        deck_text = r.deck_text
-        overrides = json.loads(a.get("deck_overrides") or "[]")
+        stored = r.stored_deck()  # None: the stored deck no longer loads (reader's rule)
+        deck_problem = r.stored_deck_problem or None
         solver = a.get("solver")
         ductility = result_ductility(r) if len(h["step"]) and solver != "linear" else None
     if solver == "linear":
@@ -59,6 +58,8 @@ def summarize(path: str | os.PathLike) -> dict:
         # issue 20 §1: bottom plate at the peak vs f_y, first crushing, residual mechanism
         "mechanism": mechanism_check(path) if len(h["step"]) else None,
         "equilibrium": None,  # how far the stored steps are from equilibrium (_equilibrium)
+        # why the stored deck no longer loads (None: it does); what needs it is unknown
+        "stored_deck_problem": deck_problem,
     }
     if out["n_steps"]:
         load, defl, its = h["load"], h["control_displacement"], h["iterations"]
@@ -79,20 +80,32 @@ def summarize(path: str | os.PathLike) -> dict:
         if "jumped" in h:
             out["jumps"] = [float(d) for d in defl[np.asarray(h["jumped"]) > 0]]
         if solver != "linear":
-            out["equilibrium"] = _equilibrium(h, deck_text, overrides)
-    return out
+            out["equilibrium"] = _equilibrium(h, stored)
+    return finite_figures(out)
 
 
-def _equilibrium(history, deck_text: str, overrides: list[str]) -> dict:
+def finite_figures(value):
+    """`value` with every non-finite float made None: a figure derived from the file (the
+    reader refuses a file holding a NaN or infinity) that is undefined, e.g. a ductility ratio
+    of a curve with no initial stiffness, is no figure ("-", JSON null), never "nan"."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: finite_figures(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [finite_figures(v) for v in value]
+    return value
+
+
+def _equilibrium(history, stored: LoadedDeck | None) -> dict:
     """The largest load and displacement norms (eqs. 4.4-4.5) over the stored steps and, where
-    the stored deck (with the run's --set overrides) reads, its scheme and tolerances."""
+    the stored deck (with the run's --set overrides) loads, its scheme and tolerances."""
     out = {"largest_load_norm": float(np.max(history["load_norm"])),
            "largest_displacement_norm": float(np.max(history["displacement_norm"])),
            "scheme": None, "tolerance_load": None, "tolerance_displacement": None}
-    try:
-        analysis = load_deck_text(deck_text, "the stored deck", overrides).deck.analysis
-    except DeckError:  # a file written without a readable deck: the norms alone
+    if stored is None:  # a file without a readable deck: the norms alone
         return out
+    analysis = stored.deck.analysis
     tol_load, tol_disp = analysis.tolerance_load, analysis.tolerance_displacement
     load, disp = np.asarray(history["load_norm"]), np.asarray(history["displacement_norm"])
     # the schemes' own test: a load norm 100x inside its tolerance passes whatever the first
@@ -203,6 +216,8 @@ def format_summary(summary: dict) -> str:
         ("run time", _num(s.get("run_time_s"), "s", ".1f")),
         *_ductility_rows(s.get("ductility"), lu),
         *(format_mechanism(s["mechanism"]) if s.get("mechanism") else []),
+        *([("stored deck", f"does not load, so what needs it is unknown: "
+            f"{s['stored_deck_problem']}")] if s.get("stored_deck_problem") else []),
     ]
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}} : {v}" for k, v in rows)

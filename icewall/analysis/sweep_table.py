@@ -29,6 +29,7 @@ from icewall.analysis.ductility import result_ductility
 from icewall.analysis.extract import extract
 from icewall.analysis.mechanism import mechanism_check
 from icewall.analysis.reference import find_reference
+from icewall.analysis.summary import finite_figures
 from icewall.deck.load import load_deck
 from icewall.results.reader import open_result
 from icewall.safe_write import csv_kind, open_for_write
@@ -61,7 +62,7 @@ def _measures(path: str) -> dict:
         attrs = res.attrs
         ductility = result_ductility(res) if attrs.get("n_steps") else {}
     fig = extract(path, residual_deflection=RESIDUAL_AT)
-    return {"specimen": attrs.get("specimen"), "status": attrs.get("status"),
+    return finite_figures({"specimen": attrs.get("specimen"), "status": attrs.get("status"),
             "reason": attrs.get("stop_reason", ""), "unit": attrs.get("load_unit"),
             "n_steps": attrs.get("n_steps"), "run_time_s": attrs.get("run_time_s"),
             "peak": fig.get("peak_load"), "peak_deflection": fig.get("deflection_at_peak"),
@@ -69,7 +70,7 @@ def _measures(path: str) -> dict:
             "residual_40": fig.get("residual_load_40"),
             "ductility_ratio": ductility.get("ductility_ratio"),
             "ductility": _verdict(ductility), "energy_Nmm": ductility.get("energy_Nmm"),
-            **_mechanism(path)}
+            **_mechanism(path)})  # an undefined figure (non-finite) is no figure
 
 
 def _mechanism(path: str) -> dict:
@@ -134,8 +135,9 @@ def build_rows(jobs, results: dict[str, dict]) -> list[dict]:
         if os.path.exists(path):
             try:
                 measures = _measures(path)
-            except Exception as exc:  # noqa: BLE001
+            except Exception as exc:  # noqa: BLE001 - named in the row, never a figure
                 measures = {"reason": f"unreadable result: {exc}"}
+                row["status"] = "unreadable"
             row.update({k: v for k, v in measures.items() if row.get(k) is None})
         refs, ref_unit = _references(job, row["specimen"])
         for column, (field, measure) in RATIOS.items():  # a ratio needs a peak (module doc)

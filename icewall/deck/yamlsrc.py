@@ -130,10 +130,24 @@ def _depth_exceeds(node: yaml.Node, limit: int) -> bool:
     return False
 
 
+def _control_character_error(text: str, exc: yaml.reader.ReaderError, file: str
+                              ) -> DeckError:
+    """A character YAML does not allow (a control character, a lone surrogate), where it is."""
+    position = exc.position if isinstance(exc.position, int) else 0
+    line = text.count("\n", 0, position) + 1
+    column = position - (text.rfind("\n", 0, position) + 1) + 1
+    code = exc.character if isinstance(exc.character, int) else ord(text[position])
+    return DeckError(f"character U+{code:04X} at column {column} is not allowed in YAML (a "
+                     "control character; not a text file?)", file, line)
+
+
 def load_yaml(text: str, file: str = "<deck>") -> object:
     """Parse YAML text with the deck loader (lines kept, YAML 1.2 exponent floats, merge
     keys, no duplicate keys, at most MAX_DEPTH deep); any problem is a one-line DeckError."""
-    loader = _make_loader(file)(text)
+    try:  # the reader refuses control characters as it is made
+        loader = _make_loader(file)(text)
+    except yaml.reader.ReaderError as exc:
+        raise _control_character_error(text, exc, file) from None
     try:
         node = loader.get_single_node()
         if node is not None and _depth_exceeds(node, MAX_DEPTH):

@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from icewall.analysis.extract import control_curve
 from icewall.analysis.reference import find_reference
-from icewall.deck.load import load_deck_text
-from icewall.errors import IcewallError, ResultError
+from icewall.errors import ResultError
 from icewall.post.common import load_axis
 from icewall.post.figures import legend_above, pyplot
 from icewall.results.reader import open_result
@@ -19,18 +17,17 @@ RESIDUAL_AT = 40.0  # mm, where the residual is compared (icewall.analysis.sweep
 RESIDUAL_FROM = 20.0  # mm, start of the residual marker (the plateau of the extractor)
 
 
-def reference_loads(attrs: dict, deck_text: str, path: str) -> dict:
+def reference_loads(attrs: dict, stored) -> dict:
     """Test ultimate and residual loads of the run's specimen in the run's load unit (reference
-    data of icewall.analysis.reference, else the deck's specimen.reference); {} if unknown."""
+    data of icewall.analysis.reference, else the specimen.reference of the stored deck, a
+    LoadedDeck or None where it does not load); {} if unknown."""
     unit = attrs.get("load_unit")
     ref = find_reference(str(attrs.get("specimen") or ""))
     if ref is not None and ref.unit == unit:
         return {k: getattr(ref, k) for k in ("ultimate_test", "residual_test")}
-    try:
-        overrides = json.loads(attrs.get("deck_overrides") or "[]")
-        deck_ref = load_deck_text(deck_text, path, overrides).deck.specimen.reference
-    except (IcewallError, ValueError, TypeError):
+    if stored is None:
         return {}
+    deck_ref = stored.deck.specimen.reference
     return {k: getattr(deck_ref, k, None) for k in ("ultimate_test", "residual_test")}
 
 
@@ -38,13 +35,13 @@ def read_curve(path: str | Path, label: str | None = None) -> dict:
     """The control curve (from its origin) of a result file, its labels and test values."""
     with open_result(path) as r:
         d, p, origin = control_curve(r.history)
-        attrs, deck_text = dict(r.attrs), r.deck_text
+        attrs, stored = dict(r.attrs), r.stored_deck()
     if not p.size:
         raise ResultError(f"{path}: no displacement-control steps to plot")
     return {"label": label or Path(path).name.removesuffix(".partial").removesuffix(".h5"),
             "specimen": attrs.get("specimen"), "attrs": attrs,
             "deflection": np.append(origin, d), "load": np.append(0.0, p),
-            "reference": reference_loads(attrs, deck_text, str(path))}
+            "reference": reference_loads(attrs, stored)}
 
 
 def plot_curves(paths: list[str | Path], labels: list[str] | None = None):

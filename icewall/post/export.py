@@ -26,7 +26,7 @@ import numpy as np
 
 from icewall.errors import ResultError
 from icewall.mesh.convert import meshio_name, to_meshio
-from icewall.results.reader import open_result
+from icewall.results.reader import FieldMissing, open_result
 from icewall.safe_write import (
     MARK,
     PVD,
@@ -64,7 +64,7 @@ def _interface_data(result, step: int, n_nodes: int) -> dict[str, np.ndarray]:
     for name, fill in (("state", -1.0), ("gap_N", 0.0), ("gap_T", 0.0)):
         try:
             values = result.array(step, f"interface/{name}")
-        except ResultError:
+        except FieldMissing:  # (a damaged one is an error)
             continue
         data = np.full(n_nodes, fill)
         data[pairs[:, 0]] = values
@@ -121,7 +121,7 @@ def export_vtu_series(result_path: str | Path, out: str | Path | None = None,
             try:
                 u = r.displacement(step)
                 point_data["displacement"] = np.column_stack([u, np.zeros(len(u))])
-            except ResultError:
+            except FieldMissing:  # (a damaged one is an error)
                 pass
             cell_data = {"region": [mesh.cell_region.astype(np.int32)]}
             for name in r.gauss_fields(step):

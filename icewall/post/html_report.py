@@ -14,7 +14,7 @@ from icewall import __version__
 from icewall.analysis.ductility import result_ductility
 from icewall.analysis.extract import extract
 from icewall.analysis.reference import ratio_stats
-from icewall.analysis.summary import LINEAR_NOTE, solver_label
+from icewall.analysis.summary import LINEAR_NOTE, finite_figures, solver_label
 from icewall.errors import ResultError
 from icewall.post.common import step_at
 from icewall.post.curves import plot_curves, reference_loads
@@ -45,12 +45,12 @@ def validation_row(path: str | Path) -> dict:
     """One table row: peak and load at 40 mm (icewall.analysis.extract), the test values, the
     test/predicted ratios, and the clause 8.4.4 ductility check."""
     with open_result(path) as r:
-        attrs, deck_text = dict(r.attrs), r.deck_text
+        attrs, stored = dict(r.attrs), r.stored_deck()
         linear = attrs.get("solver") == "linear"
         ductility = ({"verdict": None, "message": f"not assessed: {LINEAR_NOTE}"} if linear
                      else result_ductility(r))
     fig = extract(str(path), residual_deflection=RESIDUAL_AT)
-    ref = reference_loads(attrs, deck_text, str(path))
+    ref = reference_loads(attrs, stored)
     row = {"name": run_name(path), "specimen": attrs.get("specimen"),
            "solver": solver_label(attrs.get("solver")),
            "status": attrs.get("status"), "unit": attrs.get("load_unit") or "",
@@ -63,7 +63,7 @@ def validation_row(path: str | Path) -> dict:
         # a ratio needs a nonlinear run that peaked (icewall.analysis.sweep_table)
         usable = not linear and fig.get("peaked") and row[test] is not None and row[ours]
         row[key] = row[test] / row[ours] if usable else None
-    return row
+    return finite_figures(row)  # an undefined figure (non-finite) is no figure
 
 
 def _cell(row: dict, key: str) -> str:

@@ -6,6 +6,7 @@ import numpy as np
 
 from icewall.errors import ResultError
 from icewall.post.figures import draw_wall, legend_above, step_title, wall_figure
+from icewall.results.reader import FieldMissing
 
 # gap-element states as stored in /steps/N/interface/state (icewall.interface.gap)
 STATES = {0: ("stick", "tab:green", "s"), 1: ("slip", "tab:orange", ">"),
@@ -19,7 +20,7 @@ def interface_states(result, step: int) -> tuple[np.ndarray, np.ndarray]:
         raise ResultError(f"{result.path}: the model has no interface pairs (bonded interface)")
     try:
         state = result.array(step, "interface/state")
-    except ResultError:
+    except FieldMissing:
         raise ResultError(f"{result.path}: no interface state stored at step {step} (the "
                           "nonlinear solver stores it with the fields of a step)") from None
     return mesh.points[mesh.interface_pairs[:, 1]], np.asarray(state)

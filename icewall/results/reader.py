@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -9,12 +10,17 @@ from contextlib import contextmanager
 import h5py
 import numpy as np
 
-from icewall.deck.load import load_deck_text
+from icewall.deck.load import LoadedDeck, load_deck_text
 from icewall.errors import IcewallError, ResultError
 from icewall.mesh.mesh import Mesh, Region
 from icewall.results.writer import CORE_COLUMNS, FORMAT, FORMAT_VERSION, PARTIAL_SUFFIX
 
 SUPPORTED_VERSIONS = (1,)
+
+
+class FieldMissing(ResultError):
+    """A step's field (or the step's fields) is not stored: a reader may go on without it;
+    a field that is stored but damaged (NaN, wrong shape) is a plain ResultError."""
 
 
 def _py(value):
@@ -60,6 +66,37 @@ def _checked_n_steps(path: str, attrs: dict, history: h5py.Group) -> int:
     return n
 
 
+def non_finite_error(path: str, dataset: str, values: np.ndarray,
+                     steps: np.ndarray | None = None, step: int | None = None) -> ResultError:
+    """The error naming the first non-finite value of `values` (dataset, step): icewall never
+    writes one (results/step_record.py), so the file is damaged, and a NaN is never a figure."""
+    flat = np.asarray(values).reshape(-1) if steps is None else np.asarray(values)
+    i = int(np.flatnonzero(~np.isfinite(flat))[0])
+    if steps is not None:
+        step = int(steps[i]) if i < len(steps) else None
+    at = f" at step {step}" if step is not None else ""
+    return ResultError(f"{path}: damaged result file: {dataset} holds {flat[i]}{at} (icewall "
+                       "writes no NaN or infinity)")
+
+
+def _check_finite(path: str, attrs: dict, history: dict[str, np.ndarray]) -> None:
+    """ResultError on a non-finite number where icewall writes none: a float attribute, a
+    core history column, an extra column beyond its NaN fill (an infinity)."""
+    for key, value in attrs.items():
+        if isinstance(value, float) and not np.isfinite(value):
+            raise ResultError(f"{path}: damaged result file: attribute {key} = {value} (icewall "
+                              "writes no NaN or infinity)")
+    steps = history.get("step")
+    for name, column in history.items():
+        column = np.asarray(column)
+        if column.dtype.kind != "f":
+            continue
+        bad = ~np.isfinite(column) if name in CORE_COLUMNS else np.isinf(column)
+        if bad.any():  # (an extra column's NaN is its fill where a step gave no value)
+            raise non_finite_error(path, f"history/{name}", np.where(bad, column, 0.0),
+                                   steps)
+
+
 class ResultFile:
     """An open result file. Use as a context manager or call close()."""
 
@@ -89,21 +126,61 @@ class ResultFile:
                     raise ResultError(f"{self.path}: corrupt result file, /{name} missing")
             self._n = _checked_n_steps(self.path, self.attrs, self._f["history"])
             self.history = {k: ds[: self._n] for k, ds in self._f["history"].items()}
+            _check_finite(self.path, self.attrs, self.history)
             last = int(self.history["step"][-1]) if self._n else 0
             self.steps = sorted(s for s in (int(k) for k in self._f["steps"]) if s <= last)
+        except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
+            self._f.close()
+            raise _damaged(self.path, exc) from None
         except BaseException:
             self._f.close()
             raise
         self._mesh: Mesh | None = None
+        self._stored: tuple[LoadedDeck | None, str] | None = None
+
+    @property
+    def overrides(self) -> list[str]:
+        """The run's deck overrides (attribute deck_overrides, else a sweep's sweep_overrides:
+        a JSON list of strings); ResultError if the attribute is damaged."""
+        raw = self.attrs.get("deck_overrides") or self.attrs.get("sweep_overrides") or "[]"
+        try:
+            value = json.loads(raw) if isinstance(raw, str) else None
+        except (ValueError, RecursionError):
+            value = None
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise ResultError(f"{self.path}: damaged result file: attribute deck_overrides is "
+                              f"not a JSON list of strings ({' '.join(str(raw).split())[:60]})")
+        return value
+
+    def stored_deck(self) -> LoadedDeck | None:
+        """The run's deck, rebuilt from the stored text and overrides; None where it no longer
+        loads (stored_deck_problem says why). The rule of every reader: such a file is read
+        for what its history and fields hold, and a figure that needs the deck (f_y, the
+        tolerances, the jack load, the reference values, the target) is unknown."""
+        if self._stored is None:
+            try:
+                loaded = load_deck_text(self.deck_text, f"the stored deck of {self.path}",
+                                        self.overrides)
+                self._stored = (loaded, "")
+            except (IcewallError, KeyError, ValueError, TypeError, AttributeError,
+                    RecursionError) as exc:
+                self._stored = (None, " ".join(str(exc).split())[:160])
+        return self._stored[0]
+
+    @property
+    def stored_deck_problem(self) -> str:
+        """Why stored_deck() is None ("" where the deck loads)."""
+        self.stored_deck()
+        return self._stored[1] if self._stored else ""
 
     def missing_field_steps(self) -> list[int]:
         """History steps whose Gauss/nodal fields the stored deck says were written
         (outputs.fields not empty, every outputs.every-th step) but the file lacks: a damaged
         file (an empty list where the deck cannot be read)."""
-        try:
-            outputs = load_deck_text(self.deck_text, self.path).deck.outputs
-        except (IcewallError, AttributeError, TypeError, ValueError):
+        loaded = self.stored_deck()
+        if loaded is None:
             return []
+        outputs = loaded.deck.outputs
         if not outputs.fields:
             return []
         stored = set(self.steps)
@@ -117,7 +194,14 @@ class ResultFile:
 
     @property
     def deck_text(self) -> str:
-        return self._f["deck"].asstr()[()]
+        """The stored deck text; ResultError where /deck is not one string."""
+        try:
+            text = self._f["deck"].asstr()[()]
+        except (KeyError, TypeError, ValueError, OSError) as exc:
+            raise _damaged(self.path, exc) from None
+        if not isinstance(text, str):
+            raise ResultError(f"{self.path}: damaged result file: /deck is not a text")
+        return text
 
     @property
     def mesh(self) -> Mesh:
@@ -141,16 +225,21 @@ class ResultFile:
 
     def _step_group(self, step: int) -> h5py.Group:
         if step not in self.steps:
-            raise ResultError(f"{self.path}: no stored fields at step {step} "
+            raise FieldMissing(f"{self.path}: no stored fields at step {step} "
                               f"(stored steps: {_ranges(self.steps)})")
         return self._f["steps"][f"{step:05d}"]
+
+    def _finite(self, step: int, name: str, values: np.ndarray) -> np.ndarray:
+        if values.dtype.kind == "f" and not np.isfinite(values).all():
+            raise non_finite_error(self.path, f"steps/{step:05d}/{name}", values, step=step)
+        return values
 
     def displacement(self, step: int) -> np.ndarray:
         """Nodal displacements (n_nodes, 2) in mm at `step`."""
         g = self._step_group(step)
         if "displacement" not in g:
-            raise ResultError(f"{self.path}: no displacement stored at step {step}")
-        return g["displacement"][:]
+            raise FieldMissing(f"{self.path}: no displacement stored at step {step}")
+        return self._finite(step, "displacement", g["displacement"][:])
 
     def gauss_fields(self, step: int) -> list[str]:
         """Names of the Gauss-point fields stored at `step`."""
@@ -161,16 +250,16 @@ class ResultFile:
         """Gauss-point field (n_el, n_qp, k) at `step`."""
         g = self._step_group(step)
         if field not in self.gauss_fields(step):
-            raise ResultError(f"{self.path}: no Gauss field {field!r} at step {step} "
+            raise FieldMissing(f"{self.path}: no Gauss field {field!r} at step {step} "
                               f"(stored: {', '.join(self.gauss_fields(step)) or 'none'})")
-        return g["gauss"][field][:]
+        return self._finite(step, f"gauss/{field}", g["gauss"][field][:])
 
     def array(self, step: int, name: str) -> np.ndarray:
         """Another per-step field, e.g. "interface/state", at `step`."""
         g = self._step_group(step)
         if name not in g:
-            raise ResultError(f"{self.path}: no array {name!r} at step {step}")
-        return g[name][:]
+            raise FieldMissing(f"{self.path}: no array {name!r} at step {step}")
+        return self._finite(step, name, g[name][:])
 
     def forensics(self, step: int) -> dict[str, np.ndarray]:
         """Per-iteration convergence forensics of `step` (empty if none were stored)."""
@@ -198,14 +287,18 @@ def open_result(path: str | os.PathLike) -> ResultFile:
     return ResultFile(path)
 
 
+def _damaged(path: str | os.PathLike, exc: BaseException) -> ResultError:
+    text = " ".join(str(exc).split())[:160]
+    return ResultError(f"{os.fspath(path)}: damaged result file ({type(exc).__name__}: "
+                       f"{text})")
+
+
 @contextmanager
 def damaged_result(path: str | os.PathLike) -> Iterator[None]:
     """Turn what a damaged result file makes the readers raise (a group or dataset missing,
-    an array of the wrong shape, a stored deck that no longer parses) into one ResultError
-    naming the file (exit 2), instead of an internal error."""
+    an array of the wrong shape) into one ResultError naming the file (exit 2), instead of
+    an internal error. (A stored deck that no longer loads is no error: stored_deck.)"""
     try:
         yield
-    except (KeyError, ValueError, TypeError, IndexError) as exc:
-        text = " ".join(str(exc).split())[:160]
-        raise ResultError(f"{os.fspath(path)}: damaged result file ({type(exc).__name__}: "
-                          f"{text})") from None
+    except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
+        raise _damaged(path, exc) from None

@@ -34,9 +34,8 @@ def _damaged(result, tmp_path, damage) -> str:
     return str(copy)
 
 
-def _garbage_deck(f):
-    del f["deck"]
-    f.create_dataset("deck", data="{{{ not yaml")
+def _step_group_misnamed(f):
+    f["steps"].move(sorted(f["steps"])[0], "first")
 
 
 def _no_cells(f):
@@ -49,7 +48,9 @@ def _short_displacement(f):
     f.create_dataset(f"steps/{step}/displacement", data=np.zeros((3, 3)))
 
 
-@pytest.mark.parametrize(("command", "damage"), [("summary", _garbage_deck),
+# (a stored deck that is text but no longer loads is read by every reader alike, the figures
+# that need it unknown: test_inputs.py::test_every_reader_reads_a_file_whose_deck_does_not_load)
+@pytest.mark.parametrize(("command", "damage"), [("summary", _step_group_misnamed),
                                                  ("summary", _no_cells),
                                                  ("export", _short_displacement)])
 def test_a_damaged_result_is_one_line_and_exit_2(result, tmp_path, command, damage):
