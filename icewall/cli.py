@@ -196,6 +196,8 @@ def run(deck: str, overrides: tuple[str, ...], output: str | None, quiet: bool,
     _warn_resources(loaded, None if output is None else
                     str(Path(output).parent if output.endswith(".h5") else output))
     report = run_deck(loaded, output, progress=None if quiet else click.echo, resume=resume)
+    for warning in report.warnings:
+        click.echo(f"warning: {warning}", err=True)
     if not quiet:
         t = report.timings
         shares = ", ".join(f"{k} {v:.3f} s" for k, v in t.items() if k != "total")

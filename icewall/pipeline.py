@@ -19,6 +19,7 @@ from icewall.errors import ConvergenceError, ResultError
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
 from icewall.model.params_report import concrete_parameter_rows
+from icewall.preflight import check_initial_system, floating_point_guard, floating_point_note
 from icewall.results.checkpoint import checkpoint_path, read_checkpoint
 from icewall.results.output_safety import OutputLock
 from icewall.results.probe import MechanismProbe, crushed_points, yielded_points
@@ -47,6 +48,7 @@ class RunReport:
     n_equations: int
     timings: dict[str, float] = field(default_factory=dict)
     reason: str = ""
+    warnings: list[str] = field(default_factory=list)  # for stderr (preflight's note)
 
 
 HDF5_SUFFIXES = (".h5", ".hdf5", ".he5", ".hdf")
@@ -163,7 +165,10 @@ def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
         refuse_output_links(str(path))
         if replace:  # a rerun: no stale result if this one fails (an icewall result only)
             safe_write.remove(path, RESULT)
-        return _run_locked(loaded, path, lock, progress, resume, attrs or {})
+        with floating_point_guard() as counts:  # NumPy's warnings: one line, not hundreds
+            report = _run_locked(loaded, path, lock, progress, resume, attrs or {})
+        report.warnings += [note] if (note := floating_point_note(counts)) else []
+        return report
 
 
 def _run_locked(loaded: LoadedDeck, path: Path, lock: OutputLock,
@@ -179,7 +184,9 @@ def _run_locked(loaded: LoadedDeck, path: Path, lock: OutputLock,
     mesh = build_mesh(deck)
     timings["mesh"] = time.perf_counter() - start
     tic = time.perf_counter()
-    model = build_model(deck, mesh, region_materials(deck))
+    materials = region_materials(deck)
+    model = build_model(deck, mesh, materials)
+    check_initial_system(deck, mesh, materials, model)  # every scheme alike, nothing written
     timings["model"] = time.perf_counter() - tic
     say(f"{deck.specimen.name}: {mesh.n_nodes} nodes, {mesh.n_cells} {mesh.cell_type} "
         f"elements, {model.dof_map.n_equations} equations")

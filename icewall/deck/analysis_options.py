@@ -111,6 +111,11 @@ class Analysis:
                                "finish on this machine (over 1e5 steps, over 2e5 elements, more "
                                "memory than available, more output than free disk); each limit "
                                "passed is then a warning")
+    allow_unphysical: bool = option(False, doc="run a deck with a material or geometric value "
+                                    "outside its physical range (icewall.deck.physical: e.g. "
+                                    "a steel E outside 1e5-3e5 MPa, a plate outside 0.5-200 "
+                                    "mm; usually a unit slip); each value outside is then a "
+                                    "warning")
 
     def __post_init__(self) -> None:
         # the keys a deck leaves out (None) take its scheme's defaults

@@ -16,6 +16,7 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
+from icewall.deck.physical import physical_warnings
 from icewall.deck.schema import Deck
 
 MAX_STEPS = 100_000
@@ -164,9 +165,10 @@ def output_refusal(deck: Deck, directory: str | os.PathLike,
 
 
 def warnings_for(deck: Deck, est: Estimate | None = None) -> list[str]:
-    """One line each: a long run, and (with analysis.allow_large) each limit it exceeds."""
+    """One line each: a long run, with analysis.allow_large each limit it exceeds, with
+    analysis.allow_unphysical each value outside its physical range (deck.physical)."""
     est = est or estimate(deck)
-    out = []
+    out = physical_warnings(deck)
     if deck.analysis.allow_large:
         out += [f"{message} (allowed by analysis.allow_large)" for message, _ in refusals(
             deck, est)]

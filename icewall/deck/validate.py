@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from icewall.deck.physical import check_physical
 from icewall.deck.resources import refusals
 from icewall.deck.schema import FIXED_POINT_PLACEMENTS, Deck, Geometry
 
@@ -53,6 +54,7 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
     _check_mesh_size(deck, fail)
     if len(set(deck.outputs.fields)) != len(deck.outputs.fields):
         raise fail("a field is listed twice", "outputs.fields")
+    check_physical(deck, fail)  # (analysis.allow_unphysical: warnings instead)
 
 
 def _check_section(geo: Geometry, fail: ErrorFactory) -> None:
