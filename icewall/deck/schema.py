@@ -175,13 +175,14 @@ class Concrete:
                            maximum=0.5)
     printed_forms: tuple[str, ...] = option(
         [], doc="errata §1 corrections replaced by the thesis' printed form (attribution runs, "
-        "docs/thesis_reproduction.md): eq3.11a (tension branch decays from the compressive "
+        "docs/thesis_reproduction.md): eq3.2 (the orthotropic matrix without its 1/phi), eq3.3d "
+        "(phi with 2 eta31^3), eq3.11a (tension branch decays from the compressive "
         "peak strain eps_c, a plateau at f't up to it), eq3.13 (printed Lode angle, 60 deg - "
         "theta: the meridians swapped), eq3.26 (descending area integrated from 0: k solves "
         "k exp(-k eps_peak) = sigma h_c / G), eq3.34 (k_c without the exponent 1.25), "
         "fig3.12_step5 (strengths on the ray of the committed stress, not the trial stress); "
         "the point-update forms run on the NumPy kernel",
-        choices=("eq3.11a", "eq3.13", "eq3.26", "eq3.34", "fig3.12_step5"))
+        choices=("eq3.2", "eq3.3d", "eq3.11a", "eq3.13", "eq3.26", "eq3.34", "fig3.12_step5"))
     compression_branch: str = option(
         "exponential", doc="descending branch in compression: exponential (eq. 3.11b) or linear "
         "(Appendix A, Fig. A.5: 'A linear descending branch was used in all analyses'), to zero "

@@ -155,7 +155,8 @@ def _strain_and_axes(strain: np.ndarray, state: ConcreteState, formulation: str,
 
 
 def _trial_stress(strain: np.ndarray, angle: np.ndarray, state: ConcreteState,
-                  plane_stress: bool, trial_stress: str) -> np.ndarray:
+                  plane_stress: bool, trial_stress: str, printed: tuple[str, ...] = ()
+                  ) -> np.ndarray:
     """Steps 2-3: committed stress and strain increment in the new axes (errata 1.3), trial
     stress sigma_lt (n, 3) with C_l of the committed E, nu. Plane stress: sigma_3t = 0 fixes
     the out-of-plane strain (errata §3), solved into strain[:, 2]."""
@@ -166,7 +167,7 @@ def _trial_stress(strain: np.ndarray, angle: np.ndarray, state: ConcreteState,
     else:
         strain_increment = local_normal_components(strain - state.strain, angle, 1.0)
         committed_stress = local_normal_components(state.stress, angle, 2.0)
-    stiffness = orthotropic_normal_stiffness(state.secant_modulus, state.poisson_ratio)
+    stiffness = orthotropic_normal_stiffness(state.secant_modulus, state.poisson_ratio, printed)
     if plane_stress:
         strain_increment[:, 2] = -(committed_stress[:, 2]
                                    + stiffness[:, 2, 0] * strain_increment[:, 0]
@@ -256,7 +257,8 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     plane_stress = formulation == "plane_stress"
     frozen_column = None if frozen is None else np.asarray(frozen, dtype=bool)[:, None]
     strain, angle = _strain_and_axes(strain, state, formulation, frozen_column)
-    trial = _trial_stress(strain, angle, state, plane_stress, trial_stress)
+    printed = tuple(getattr(params, "printed_forms", ()))
+    trial = _trial_stress(strain, angle, state, plane_stress, trial_stress, printed)
     eps_u = trial / state.secant_modulus  # step 4: secant (errata 1.1 on eq. 3.8)
     # step 6 first: loading vs unloading, which does not depend on the strength surface
     loading, sign_change = loading_directions(trial, eps_u, state, params)
@@ -272,7 +274,7 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     moduli = None  # steps 7-8 (skipped where the caller builds its own)
     if with_moduli:
         new_stiffness = orthotropic_normal_stiffness(directions["secant_modulus"],
-                                                     directions["poisson_ratio"])
+                                                     directions["poisson_ratio"], printed)
         if plane_stress:
             new_stiffness = condense_plane_stress(new_stiffness)
         moduli = global_moduli(new_stiffness, directions["shear_modulus"], angle)

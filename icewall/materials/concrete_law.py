@@ -134,7 +134,8 @@ def floored_moduli(state: Any, params: Any, formulation: str, floor: float,
     """
     E0, nu0 = float(params.E0), float(params.nu0)
     secant = matrix_secant(state) if returned_secant else state.secant_modulus
-    normal = orthotropic_normal_stiffness(np.maximum(secant, floor * E0), state.poisson_ratio)
+    normal = orthotropic_normal_stiffness(np.maximum(secant, floor * E0), state.poisson_ratio,
+                                          tuple(getattr(params, "printed_forms", ())))
     if formulation == "plane_stress":
         normal = condense_plane_stress(normal)
     G0 = E0 / (2.0 * (1.0 + nu0))

@@ -90,12 +90,15 @@ def global_strain(principal: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return strain
 
 
-def orthotropic_normal_stiffness(modulus: np.ndarray, poisson: np.ndarray) -> np.ndarray:
+def orthotropic_normal_stiffness(modulus: np.ndarray, poisson: np.ndarray,
+                                 printed: tuple[str, ...] = ()) -> np.ndarray:
     """Normal block (n, 3, 3) of the local stiffness, eq. 3.2 with the 1/phi prefactor.
 
     Eq. 3.2 / errata 1.1: the printed matrix must be divided by phi.
     Eq. 3.3a-c: eta_ij^2 = nu_i nu_j. Eq. 3.3d / errata 1.1: phi = 1 - eta12^2 - eta23^2 -
     eta31^2 - 2 eta12 eta23 eta31 (printed 2 eta31^3); floored at PHI_MIN (errata §3).
+    `printed` (deck printed_forms): "eq3.2" the matrix as printed, without 1/phi; "eq3.3d"
+    the 1/phi of the printed phi (2 eta31^3).
     """
     C = np.empty(modulus.shape[:1] + (3, 3))
     (C[:, 0, 0], C[:, 1, 1], C[:, 2, 2], C[:, 0, 1], C[:, 0, 2],
@@ -103,7 +106,20 @@ def orthotropic_normal_stiffness(modulus: np.ndarray, poisson: np.ndarray) -> np
                                              poisson[:, 0], poisson[:, 1], poisson[:, 2],
                                              PHI_MIN)
     C[:, 1, 0], C[:, 2, 0], C[:, 2, 1] = C[:, 0, 1], C[:, 0, 2], C[:, 1, 2]
+    if "eq3.2" in printed or "eq3.3d" in printed:
+        C *= _printed_phi_factor(poisson, printed)[:, None, None]
     return C
+
+
+def _printed_phi_factor(poisson: np.ndarray, printed: tuple[str, ...]) -> np.ndarray:
+    """phi / phi_printed of the printed forms (eq. 3.2 without 1/phi: phi; eq. 3.3d's phi
+    with 2 eta31^3: phi over it), each phi floored at PHI_MIN as in normal_stiffness."""
+    n1, n2, n3 = poisson[:, 0], poisson[:, 1], poisson[:, 2]
+    e12, e23, e31 = np.sqrt(n1 * n2), np.sqrt(n2 * n3), np.sqrt(n3 * n1)
+    squares = e12 * e12 + e23 * e23 + e31 * e31
+    phi = np.maximum(1.0 - squares - 2.0 * e12 * e23 * e31, PHI_MIN)
+    used = np.maximum(1.0 - squares - 2.0 * e31 ** 3, PHI_MIN) if "eq3.3d" in printed else phi
+    return phi if "eq3.2" in printed else phi / used
 
 
 def uniaxial_coupling_matrix(modulus: np.ndarray, poisson: np.ndarray) -> np.ndarray:

@@ -129,9 +129,9 @@ class ConcreteParameters:
         return self.k_c * self.fc > self.E0
 
 
-PRINTED_FORMS = ("eq3.11a", "eq3.13", "eq3.26", "eq3.34", "fig3.12_step5")
+PRINTED_FORMS = ("eq3.2", "eq3.3d", "eq3.11a", "eq3.13", "eq3.26", "eq3.34", "fig3.12_step5")
 """The errata §1 corrections whose printed form can run (deck materials.concrete.printed_forms)."""
-POINT_FORMS = ("eq3.11a", "eq3.13", "fig3.12_step5")
+POINT_FORMS = ("eq3.2", "eq3.3d", "eq3.11a", "eq3.13", "fig3.12_step5")
 """Printed forms of the point update (the NumPy kernel only; the others set k_t, k_c)."""
 
 _DEFAULTS = ("E0", "ft", "eps_c", "eps_t", "nu0", "Gf", "alpha", "G_cr", "k_t", "k_c",

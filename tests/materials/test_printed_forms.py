@@ -140,3 +140,29 @@ def test_surface_calibrations():
         assert np.allclose(surface.a, expected.a) and np.allclose(surface.b, expected.b)
     default = concrete_parameters(load_deck(CF4).deck.materials.concrete, 24.5).surface
     assert default.name.startswith("B")
+
+
+def test_eq_3_2_and_3_3d_printed():
+    """errata §1.1's numbers: isotropic E 30 000, nu 0.2: C11 28 800 printed, 33 333 corrected;
+    eta = (0.2, 0.3, 0.45): phi 0.485 printed (2 eta31^3), 0.614 corrected."""
+    from icewall.materials.orthotropic import orthotropic_normal_stiffness
+
+    E, nu = np.full((1, 3), 30000.0), np.full((1, 3), 0.2)
+    assert orthotropic_normal_stiffness(E, nu)[0, 0, 0] == pytest.approx(33333.33, abs=0.01)
+    assert orthotropic_normal_stiffness(E, nu, ("eq3.2",))[0, 0, 0] == pytest.approx(28800.0)
+    nu3 = np.array([[0.3, 0.04 / 0.3, 0.2025 / 0.3]])  # eta12 0.2, eta23 0.3, eta31 0.45
+    ratio = (orthotropic_normal_stiffness(E, nu3, ("eq3.3d",))
+             / orthotropic_normal_stiffness(E, nu3))
+    assert np.allclose(ratio, 0.6135 / 0.48525, rtol=1e-9)  # 1 - 0.3325 - 0.054, - 0.18225
+    # through the update: eps_iu of step 4 from the printed matrix is phi times the corrected
+    # one (errata: "Without 1/phi ... dε_1u = 0.864 dε_1"), phi = (1 + nu)^2 (1 - 2 nu)
+    strain = np.array([[-0.0002, 0.0, 0.0, 0.0]])
+    p = derive_concrete_parameters(53.5, 24.5, printed_forms=("eq3.2",))
+    printed = update_concrete(strain, ConcreteState.initial(1, p), p, "plane_strain",
+                              "incremental")[2].equivalent_uniaxial_strain
+    corrected = update_concrete(strain, ConcreteState.initial(1, PARAMS_53), PARAMS_53,
+                                "plane_strain", "incremental")[2].equivalent_uniaxial_strain
+    assert np.allclose(printed, corrected * 1.2**2 * 0.6, rtol=1e-12)
+
+
+PARAMS_53 = derive_concrete_parameters(53.5, 24.5)
