@@ -146,8 +146,9 @@ def _strength_jacobian(trial: np.ndarray, strength: np.ndarray, loading: np.ndar
     tension, compression = (trial > 0.0) & ~zero, (trial < 0.0) & ~zero
     any_tension = tension.any(axis=1, keepdims=True)
     any_compression = compression.any(axis=1, keepdims=True)
-    rule_b = (np.zeros_like(zero) if params.compression_tension_rule == "equal"
-              else strength < -params.fc)  # min(s sigma, -f'c)
+    reading = params.compression_tension_rule
+    rule_b = (np.zeros_like(zero) if reading == "equal" else strength > -params.fc
+              if reading == "cap" else strength < -params.fc)  # floor: min(s sigma, -f'c)
     follows = np.where(compression & any_tension, rule_b,
                        np.where(tension & ~any_compression, strength > params.ft, True))
     follows &= loading & ~zero
@@ -182,8 +183,10 @@ def _blended_strength_jacobian(trial: np.ndarray, strength: np.ndarray, zero: np
     compression = (p < 0.0) & ~nil  # the rest: tension (zero components are not active)
     in_tension, in_compression = mode_rule_weights(p, nil, params)
     weight = np.where(compression, in_tension, in_compression)
-    equal = params.compression_tension_rule == "equal"
-    ray_followed = np.where(compression, False if equal else given < -fc, given > ft)
+    reading = params.compression_tension_rule
+    equal = reading == "equal"
+    followed_b = False if equal else (given > -fc if reading == "cap" else given < -fc)
+    ray_followed = np.where(compression, followed_b, given > ft)
     # (only a loading direction's sigma_ic is the update's for this trial stress)
     readable = active[rows] & ((weight == 0.0) | ((weight == 1.0) & ray_followed))
     scale = np.empty(p.shape[0])

@@ -57,9 +57,15 @@ def equivalent_uniaxial_strengths(principal: ArrayLike, params: ConcreteParamete
     # rule (b): "the compressive strength/strain is set equal to the uniaxial strength/strain
     # ... if the calculated values from the ultimate surfaces are greater": read in magnitudes
     # a cap, read signed (errata §3) a floor; "equal" applies both, "floor" the errata's
-    return mode_rule_strength(p, s[:, None] * p, zero, hint, any_tension, any_compression,
-                              in_tension, in_compression, fc, ft,
-                              params.compression_tension_rule == "equal", banded)
+    out = mode_rule_strength(p, s[:, None] * p, zero, hint, any_tension, any_compression,
+                             in_tension, in_compression, fc, ft,
+                             params.compression_tension_rule == "equal", banded)
+    if params.compression_tension_rule == "cap":  # read in magnitudes: at most f'c
+        compressive, scaled = (p < 0.0) & ~zero, s[:, None] * p
+        weight = in_tension if banded else any_tension.astype(float)
+        out = np.where(compressive, (1.0 - weight) * scaled
+                       + weight * np.maximum(scaled, -fc), out)
+    return out
 
 
 def mode_rule_weights(principal: np.ndarray, zero: np.ndarray, params: ConcreteParameters

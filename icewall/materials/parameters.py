@@ -83,7 +83,8 @@ class ConcreteParameters:
     surface: WillamWarnkeSurface
     peak_strain_slope: float = 3.0
     # §3.2.5 rule (b) in compression-tension states: "equal" = the compressive parameters are
-    # the uniaxial f'c, eps_c; "floor" = at least those (errata §3's signed reading)
+    # the uniaxial f'c, eps_c; "floor" = at least those (errata §3's signed reading); "cap" =
+    # at most those (the rule read in magnitudes)
     compression_tension_rule: str = "equal"
     # width of the band of a principal stress, as a fraction of f't, over which rules (b) and
     # (c) of §3.2.5 blend in as it changes sign (0: the thesis' sharp rules, a jump)
@@ -109,8 +110,8 @@ class ConcreteParameters:
             raise ValueError("compression_branch must be 'exponential' or 'linear'")
         if self.peak_strain_slope < 0.0:
             raise ValueError("peak_strain_slope must be >= 0")
-        if self.compression_tension_rule not in ("equal", "floor"):
-            raise ValueError("compression_tension_rule must be 'equal' or 'floor'")
+        if self.compression_tension_rule not in ("equal", "floor", "cap"):
+            raise ValueError("compression_tension_rule must be 'equal', 'floor' or 'cap'")
         if not (math.isfinite(self.mode_rule_band) and 0.0 <= self.mode_rule_band <= 10.0):
             raise ValueError(f"mode_rule_band must be in [0, 10], got {self.mode_rule_band}")
         if self.post_peak_strength not in ("ray", "peak"):

@@ -138,9 +138,9 @@ def _concrete_law(c: Concrete, analysis: Analysis, params: ConcreteParameters,
     own_moduli = not tangent and (floor > 0.0 or coaxial)  # built by the law from the trial state
     # $ICEWALL_CONCRETE_KERNEL: the same update and moduli compiled (the deck's differenced
     # `tangent` stays NumPy; update(..., tangent=True) differentiates the compiled update)
-    # the printed point forms and the linear branch (App. A) are written in NumPy only
-    numpy_only = bool(set(c.printed_forms) & set(POINT_FORMS)) or c.compression_branch != \
-        "exponential"
+    # the printed point forms, the linear branch (App. A) and rule (b)'s cap: NumPy only
+    numpy_only = (bool(set(c.printed_forms) & set(POINT_FORMS))
+                  or c.compression_branch != "exponential" or c.compression_tension_rule == "cap")
     kernel = (choose_kernel(analysis.formulation, c.trial_stress)
               if own_moduli and not numpy_only else "numpy")
     return ConcreteLaw(concrete_point_parameters(params, h_points, fixed), analysis.formulation,

@@ -166,3 +166,25 @@ def test_eq_3_2_and_3_3d_printed():
 
 
 PARAMS_53 = derive_concrete_parameters(53.5, 24.5)
+
+
+def test_rule_b_readings_equal_floor_cap():
+    """3.2.5 (b) in a compression-tension state: equal = f'c; floor (signed) = at least f'c;
+    cap (magnitudes) = at most f'c."""
+    from icewall.materials.mode_rules import equivalent_uniaxial_strengths
+
+    confined = np.array([[0.5, -20.0, -60.0]])  # small tension, confined strut: surface > f'c
+    weakened = np.array([[2.0, 0.0, -10.0]])  # large tension: surface < f'c
+    values = {}
+    for rule in ("equal", "floor", "cap"):
+        p = derive_concrete_parameters(53.5, 24.5, compression_tension_rule=rule)
+        values[rule] = [equivalent_uniaxial_strengths(s, p)[0, 2] for s in (confined, weakened)]
+    surface = derive_concrete_parameters(53.5, 24.5, compression_tension_rule="floor")
+    assert values["equal"] == [pytest.approx(-53.5), pytest.approx(-53.5)]
+    assert values["floor"][0] < -53.5 and values["floor"][1] == pytest.approx(-53.5)
+    assert values["cap"][0] == pytest.approx(-53.5) and values["cap"][1] > -53.5
+    del surface
+    deck = load_deck(CF4, ["materials.concrete.compression_tension_rule=cap"]).deck
+    c = deck.materials.concrete
+    law = _concrete_law(c, deck.analysis, concrete_parameters(c, 24.5), np.full(9, 24.5))
+    assert law.kernel == "numpy"
