@@ -171,6 +171,16 @@ def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
         return report
 
 
+def _drop_columns(inc, energy: dict[str, float]) -> dict[str, float]:
+    """History columns of a run that takes dynamic drops (its energy has damping_work): the
+    time steps of the step's drop (0 for a static step) and its largest kinetic energy."""
+    if "damping_work" not in energy:
+        return {}
+    drop = inc.path_energy
+    return {"dynamic_time_steps": int(inc.forensics.get("time_steps", [0])[0]),
+            "largest_kinetic_energy": 0.0 if drop is None else drop.largest_kinetic}
+
+
 def _run_locked(loaded: LoadedDeck, path: Path, lock: OutputLock,
                 progress: Callable[[str], None] | None, resume: bool, extra: dict
                 ) -> RunReport:
@@ -290,14 +300,17 @@ def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings
                 scalars={**report.counts, **report.energy, "step_cuts": inc.cuts,
                          "snap_back": int(inc.snap_back), "jumped": int(inc.jumped),
                          "preload_stage": int(inc.kind == "preload"),
-                         "preload_factor": inc.preload_factor, **mechanism},
+                         "preload_factor": inc.preload_factor, **mechanism,
+                         **_drop_columns(inc, report.energy)},
                 arrays=report.arrays if due and "state" in fields else {},
                 forensics={k: np.asarray(v, dtype=np.int64) for k, v in inc.forensics.items()}))
             writer.write_checkpoint(report.checkpoint())
             write_time += time.perf_counter() - tic
+            drop = (f", dynamic drop: {inc.forensics['time_steps'][0]} time steps"
+                    if "time_steps" in inc.forensics else "")
             say(f"  step {n_steps:3d} {inc.kind:8s} deflection {inc.control_displacement:7.3f} mm"
                 f"  {model.measure_name} = {load:.5g} {model.measure_unit}  "
-                f"({inc.iterations} it{', cut ' + str(inc.cuts) if inc.cuts else ''})")
+                f"({inc.iterations} it{', cut ' + str(inc.cuts) if inc.cuts else ''}{drop})")
     except ConvergenceError as exc:
         status, reason = "stopped", f"{exc.reason}: {exc}"
         say(f"stopped after {n_steps} converged steps: {reason}")

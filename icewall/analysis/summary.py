@@ -79,9 +79,24 @@ def summarize(path: str | os.PathLike) -> dict:
             out["snap_throughs"] = [float(d) for d in defl[np.asarray(h["snap_back"]) > 0]]
         if "jumped" in h:
             out["jumps"] = [float(d) for d in defl[np.asarray(h["jumped"]) > 0]]
+        if "dynamic_time_steps" in h:
+            out["dynamic_drops"] = _dynamic_drops(h, defl)
         if solver != "linear":
             out["equilibrium"] = _equilibrium(h, stored)
     return finite_figures(out)
+
+
+def _dynamic_drops(history, deflection) -> dict:
+    """The steps reached by a dynamic drop (solve.dynamic): their deflections, time steps and
+    the largest kinetic energy of any (N mm) with the deflection of its drop."""
+    steps = np.asarray(history["dynamic_time_steps"])
+    kinetic = np.asarray(history["largest_kinetic_energy"])
+    dynamic = np.flatnonzero(steps > 0)
+    largest = int(dynamic[np.argmax(kinetic[dynamic])]) if dynamic.size else None
+    return {"deflections": [float(deflection[i]) for i in dynamic],
+            "time_steps": int(steps.sum()),
+            "largest_kinetic_energy": None if largest is None else float(kinetic[largest]),
+            "deflection_of_largest": None if largest is None else float(deflection[largest])}
 
 
 def finite_figures(value):
@@ -114,6 +129,18 @@ def _equilibrium(history, stored: LoadedDeck | None) -> dict:
     out.update(scheme=analysis.scheme, tolerance_load=tol_load,
                tolerance_displacement=tol_disp, steps_outside=int(np.count_nonzero(~met)))
     return out
+
+
+def _dynamic_rows(drops: dict | None) -> list[tuple[str, str]]:
+    """The summary's line on the dynamic drops (none for a run that cannot take them)."""
+    if drops is None:
+        return []
+    if not drops["deflections"]:
+        return [("dynamic drops", "none")]
+    return [("dynamic drops", f"{len(drops['deflections'])} "
+             f"({drops['time_steps']} time steps), {_deflection_list(drops['deflections'])};"
+             f" largest kinetic energy {drops['largest_kinetic_energy']:.4g} N mm "
+             f"(at {drops['deflection_of_largest']:.4g} mm)")]
 
 
 def _num(value, unit: str = "", fmt: str = ".6g") -> str:
@@ -210,6 +237,7 @@ def format_summary(summary: dict) -> str:
         ("total iterations", _num(s.get("total_iterations"))),
         ("iterations per step", iters),
         ("snap-throughs", _deflection_list(s.get("snap_throughs") or ())),
+        *_dynamic_rows(s.get("dynamic_drops")),
         ("steps over a stall", ", ".join(f"to {d:.4g} mm" for d in s.get("jumps") or ())
          or "none"),
         ("equilibrium", _equilibrium_text(s.get("equilibrium"), bool(s.get("jumps")))),
@@ -220,4 +248,10 @@ def format_summary(summary: dict) -> str:
             f"{s['stored_deck_problem']}")] if s.get("stored_deck_problem") else []),
     ]
     width = max(len(k) for k, _ in rows)
-    return "\n".join(f"{k:<{width}} : {v}" for k, v in rows)
+    return "\n".join(f"{k:<{width}} : {_printable(v)}" for k, v in rows)
+
+
+def _printable(text: str) -> str:
+    """`text` with control characters shown escaped: a damaged file's stop reason or unit
+    cannot move the terminal's cursor."""
+    return "".join(c if c.isprintable() else ascii(c)[1:-1] for c in str(text))

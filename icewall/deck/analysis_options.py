@@ -107,6 +107,28 @@ class Analysis:
                                    choices=("every_iteration", "every_step"))
     preload_increments: int = option(5, doc="load-control increments of the in-plane preload",
                                      minimum=1)
+    drops: str = option("viscous", doc="scheme newton: how a drop past a limit point of the "
+                        "held stroke is taken: viscous (committed viscous sub-steps without "
+                        "mass to a static equilibrium, docs/solver.md item 17) or dynamic (the "
+                        "wall's motion with its own mass and damping, generalized-alpha, until "
+                        "it comes to rest: item 36; it stops where the concrete law's stress "
+                        "jumps, items 21-24, 36)", choices=("viscous", "dynamic"))
+    damping_ratio: float = option(0.05, doc="scheme newton: viscous damping of a dynamic drop "
+                                  "as a fraction of critical at the wall's first mode "
+                                  "(mass-proportional Rayleigh damping, C = 2 xi omega_1 M; 5 "
+                                  "%: a cracked reinforced-concrete member), a parameter of "
+                                  "the physics (docs/solver.md)", minimum=0.0, maximum=1.0)
+    spectral_radius: float = option(0.5, doc="scheme newton: the generalized-alpha "
+                                    "integrator's spectral radius at infinite frequency "
+                                    "(Chung & Hulbert 1993): 1 keeps every mode, lower values "
+                                    "damp the spurious high modes of the mesh and of the "
+                                    "interface pairs' impacts (0.8 let CF-4's third drop run "
+                                    "away, item 36); the low modes are kept to second order "
+                                    "either way", minimum=0.0,
+                                    maximum=1.0)
+    time_step_scale: float = option(1.0, doc="scheme newton: factor on every time step of a "
+                                    "dynamic drop (0.5 halves them all: the time-step "
+                                    "convergence check)", exclusive_minimum=0.0, maximum=10.0)
     allow_large: bool = option(False, doc="run a deck that icewall check estimates cannot "
                                "finish on this machine (over 1e5 steps, over 2e5 elements, more "
                                "memory than available, more output than free disk); each limit "

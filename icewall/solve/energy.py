@@ -1,5 +1,6 @@
 """Energy bookkeeping per step: external work = stored elastic energy + concrete cracking and
-crushing dissipation + steel plastic work + interface friction work (+ imbalance)."""
+crushing dissipation + steel plastic work + interface friction work + the dynamic drops'
+viscous damping and the kinetic energy left where they ended (+ imbalance)."""
 
 from __future__ import annotations
 
@@ -16,6 +17,19 @@ class EnergyAccount:
     internal_work: dict[str, float] = field(default_factory=dict)  # per material group
     friction_work: float = 0.0
     elastic_energy: dict[str, float] = field(default_factory=dict)
+    damping_work: float = 0.0  # viscous damping of the dynamic drops
+    kinetic_lost: float = 0.0  # kinetic energy left where a drop ended (at rest within KINETIC_END)
+    dynamic: bool = False  # the run can take dynamic drops: record their columns
+
+    def add_drop(self, drop) -> None:
+        """The work terms of a dynamic drop (solve.dynamic.DropEnergy), summed over its time
+        steps."""
+        self.external_work += drop.external
+        for group, work in drop.internal.items():
+            self.internal_work[group] = self.internal_work.get(group, 0.0) + work
+        self.friction_work += drop.friction
+        self.damping_work += drop.damping
+        self.kinetic_lost += drop.kinetic
 
     def add_external(self, load_old: np.ndarray, load_new: np.ndarray, du: np.ndarray) -> None:
         """Trapezoidal work of the applied loads over a converged increment."""
@@ -38,10 +52,14 @@ class EnergyAccount:
         concrete = self.internal_work.get("concrete", 0.0) - self.elastic_energy.get(
             "concrete", 0.0)
         steel = self.internal_work.get("steel", 0.0) - self.elastic_energy.get("steel", 0.0)
-        return {"external_work": self.external_work, "elastic_energy": stored,
-                "concrete_dissipation": concrete, "plastic_work": steel,
-                "friction_work": self.friction_work,
-                "energy_imbalance": self.external_work - work - self.friction_work}
+        imbalance = (self.external_work - work - self.friction_work - self.damping_work
+                     - self.kinetic_lost)
+        out = {"external_work": self.external_work, "elastic_energy": stored,
+               "concrete_dissipation": concrete, "plastic_work": steel,
+               "friction_work": self.friction_work, "energy_imbalance": imbalance}
+        if self.dynamic:
+            out.update(damping_work=self.damping_work, kinetic_energy_lost=self.kinetic_lost)
+        return out
 
 
 def secant_elastic_energy(stress: np.ndarray, strain: np.ndarray, dV: np.ndarray) -> float:

@@ -88,17 +88,21 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None
     previous_u = start.u
     previous_load = start.load_factor * model.reference_load + start.preload_factor * preload
     follow = follow_newton_path if settings.scheme == "newton" else follow_path
+    energy.dynamic = problem.mass is not None
     for inc, path in follow(problem, settings, start, resume=resume is not None):
         ev = inc.evaluation
         load = inc.load_factor * model.reference_load + inc.preload_factor * preload
-        energy.add_external(previous_load, load, inc.u - previous_u)
-        for group in groups:
-            c = group.cells
-            energy.add_internal(group.name, stress[c], ev.stress[c], strain[c], ev.strain[c],
-                                structure.kinematics.dV[c])
+        if inc.path_energy is not None:  # a dynamic drop: its terms over its time steps
+            energy.add_drop(inc.path_energy)
+        else:
+            energy.add_external(previous_load, load, inc.u - previous_u)
+            for group in groups:
+                c = group.cells
+                energy.add_internal(group.name, stress[c], ev.stress[c], strain[c],
+                                    ev.strain[c], structure.kinematics.dV[c])
+            energy.friction_work += constraints.friction_work_increment()
         for name, value in _elastic_energy(structure, ev).items():
             energy.set_elastic(name, value)
-        energy.friction_work += constraints.friction_work_increment()
         counts = {**state_counts(groups, ev.states), **constraints.counts()}
         snapshot = functools.partial(take_checkpoint, path, constraints, energy)
         yield StepReport(inc, counts, energy.record(), structure, constraints, model.dof_map,
@@ -121,7 +125,9 @@ def take_checkpoint(path: PathState, constraints, energy: EnergyAccount
         "path/last_increment": (np.zeros(0) if path.last_increment is None
                                 else path.last_increment),
         "energy/external_work": energy.external_work,
-        "energy/friction_work": energy.friction_work}
+        "energy/friction_work": energy.friction_work,
+        "energy/damping_work": energy.damping_work,
+        "energy/kinetic_lost": energy.kinetic_lost}
     for kind in ("internal_work", "elastic_energy"):
         for name, value in getattr(energy, kind).items():
             out[f"energy/{kind}/{name}"] = value
@@ -161,6 +167,8 @@ def restore_checkpoint(data: dict[str, np.ndarray], structure: Structure, constr
             constraints.augmentation = float(data["constraints/augmentation"])
         energy.external_work = float(data["energy/external_work"])
         energy.friction_work = float(data["energy/friction_work"])
+        energy.damping_work = float(data.get("energy/damping_work", 0.0))
+        energy.kinetic_lost = float(data.get("energy/kinetic_lost", 0.0))
         for name, value in data.items():
             kind, _, group = name.removeprefix("energy/").partition("/")
             if name.startswith("energy/") and group:

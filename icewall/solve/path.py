@@ -42,6 +42,8 @@ from icewall.solve.controls import (
     largest_principal,
 )
 from icewall.solve.drop import FIRST_INVERSE_STEP, drop_step
+from icewall.solve.dynamic import dynamic_drop
+from icewall.solve.integrator import Dynamics, GeneralizedAlpha, first_mode_frequency
 from icewall.solve.newton import newton_increment
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
@@ -178,6 +180,7 @@ class _Mode:
     slope: float = math.nan  # the secant dP/dd of the last converged displacement step
     peak: float = 0.0  # the largest |load factor| so far: the scale of a separated structure
     halt: bool = False  # stop after the step just taken (on_snap_back: stop, separated)
+    omega: float = math.nan  # the wall's first-mode frequency (rad/s): the drops' damping
 
     def located(self, current: float, load: float, settings: SolverSettings) -> bool:
         """Whether the bracket [current, ceiling] pins the limit point's load to the
@@ -196,7 +199,12 @@ class _Mode:
             return (path.snap_back_control(self.release),
                     f"control {current:.4g} (snap-back control, step {self.release:.3g})")
         step = self.size if self.name == "displacement" else steps.smallest
-        if self.name == "drop" and settings.drop_held == "stroke":
+        if self.name == "drop" and (settings.drop_held == "stroke"
+                                    or problem.mass is not None):
+            # a dynamic drop holds the stroke, the jack loads' work-conjugate displacement:
+            # a point elsewhere held through them is no constraint a loading system applies
+            # (its force does not act along its gradient), and such a drop runs away
+            # (docs/solver.md, item 36)
             stroke = StrokeControl.of_load(path.R)  # never past the run's target
             step = min(step, settings.target - current)
             stroke = replace(stroke, target=stroke.measure(path.state.u) + step)
@@ -290,6 +298,12 @@ class _Mode:
                                    "drop": "a drop at a fixed deflection"}[name])
 
 
+def _dynamics(problem: Problem, settings: SolverSettings, omega: float) -> Dynamics:
+    """The drops' mass, damping and integrator."""
+    return Dynamics(problem.mass, omega, settings.damping_ratio,
+                    GeneralizedAlpha(settings.spectral_radius), settings.time_step_scale)
+
+
 def _advance_control(problem: Problem, settings: SolverSettings, state: PathState,
                      preload: float, resume: tuple) -> Iterator[tuple[Increment, PathState]]:
     """Displacement control to the target, the snap-back control through snap-backs, a drop
@@ -301,7 +315,8 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         # the drops, a limit point's bracket end and slope, the peak): below
         mode = _Mode("opening" if resume[2] else "displacement", resume[0], resume[1],
                      resume[4] if len(resume) > 4 else FIRST_INVERSE_STEP,
-                     *(resume[5:8] if len(resume) > 7 else ()))
+                     *(resume[5:8] if len(resume) > 7 else ()),
+                     omega=resume[8] if len(resume) > 8 else math.nan)
         stagnant = int(resume[3])
     path = _Path(problem, state, preload)
     last_increment = state.last_increment
@@ -311,7 +326,10 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         control, where = mode.control(problem, path, current, steps, settings)
         tic = time.perf_counter()
         try:
-            if mode.name == "drop":
+            if mode.name == "drop" and problem.mass is not None:
+                inc = dynamic_drop(problem, settings, state, control, preload,
+                                   _dynamics(problem, settings, mode.omega))
+            elif mode.name == "drop":
                 inc, mode.damping = drop_step(problem, settings, state, control, preload,
                                               mode.damping, last_increment)
             else:
@@ -334,10 +352,13 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         stagnant = stagnant + 1 if still else 0
         mode.after_success(inc, d_deflection, d_load, steps, settings)
         last_increment = inc.u - state.u
+        if math.isnan(mode.omega) and problem.mass is not None:  # the run's first step
+            mode.omega = first_mode_frequency(last_increment, d_load, path.R, problem.mass)
         state = _next_state(problem, state, inc, ("control", mode.size, mode.release,
                                                   float(mode.name == "opening"),
                                                   float(stagnant), mode.damping,
-                                                  mode.ceiling, mode.slope, mode.peak))
+                                                  mode.ceiling, mode.slope, mode.peak,
+                                                  mode.omega))
         state.last_increment = last_increment
         path.state = state
         yield inc, state

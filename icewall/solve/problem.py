@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from icewall import sparse
+from icewall.fem.mass import lumped_mass_vector
 from icewall.model.build import Model
 from icewall.model.materials import build_groups
 from icewall.model.structure import Structure
@@ -23,6 +24,7 @@ class Problem:
     reference_load: np.ndarray  # (n_eq,) the load pattern the load factor scales (R*)
     preload: np.ndarray | None  # in-plane load vector (n_eq,), held during control
     control_equation: int  # deflection = -u[control_equation]
+    mass: np.ndarray | None = None  # (n_eq,) lumped mass diagonal, t (dynamic drops)
 
     def point_flags(self, states) -> tuple[np.ndarray | None, ...]:
         """Per group, the (n, k) flags of each point whose switching within an increment
@@ -38,10 +40,27 @@ def build_problem(model: Model, scheme: str = "secant") -> Problem:
                           model.kinematics.dV.shape[1])
     structure = Structure(model.kinematics, model.assembler, groups)
     constraints = make_constraints(model)
+    mass = None
     if scheme == "newton":
         newton_constraints(constraints)
+        if model.description.analysis.drops == "dynamic":
+            mass = wall_mass(model)
     return Problem(structure, constraints, model.reference_load, model.preload,
-                   model.control_equation)
+                   model.control_equation, mass)
+
+
+def wall_mass(model: Model) -> np.ndarray:
+    """(n_eq,) HRZ-lumped mass of every material's density (fem.mass), plus the loading
+    head's (loads.control.head_mass) on the loaded equations in proportion to their load."""
+    density = np.zeros(len(model.cell_material))
+    for key, section in model.description.materials.items():
+        density[model.cell_material == key] = getattr(section, "density", 0.0)
+    mass = lumped_mass_vector(model.kinematics, density, model.dof_map.n_equations)
+    head = getattr(model.description.control, "head_mass", 0.0)
+    if head > 0.0:
+        share = np.abs(model.reference_load)
+        mass = mass + head * share / share.sum()
+    return mass
 
 
 def make_constraints(model: Model):

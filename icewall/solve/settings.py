@@ -33,6 +33,10 @@ class SolverSettings:
     target_iterations: int = 6  # Newton: iterations per step the step-size controller aims at
     trace_snap_backs: bool = False  # Newton: trace a snap-back (opening control) before a drop
     drop_held: str = "deflection"  # Newton: a drop holds the deflection | the stroke
+    drops: str = "viscous"  # Newton: viscous | dynamic (a drop's physics)
+    damping_ratio: float = 0.05  # Newton: a dynamic drop's damping at the first mode
+    spectral_radius: float = 0.5  # Newton: generalized-alpha rho_inf of the dynamic drops
+    time_step_scale: float = 1.0  # Newton: factor on every time step of a dynamic drop
 
 
 def solver_settings(description: ModelDescription) -> SolverSettings:
@@ -47,7 +51,9 @@ def solver_settings(description: ModelDescription) -> SolverSettings:
         acceleration=a.acceleration, max_flag_changes=a.max_flag_changes,
         on_snap_back=a.on_snap_back, max_relaxation=a.max_relaxation, max_jumps=a.max_jumps,
         jump_increments=a.jump_increments,
-        scheme=a.scheme, trace_snap_backs=a.trace_snap_backs, drop_held=c.drop_held)
+        scheme=a.scheme, trace_snap_backs=a.trace_snap_backs, drop_held=c.drop_held,
+        drops=a.drops, damping_ratio=a.damping_ratio, spectral_radius=a.spectral_radius,
+        time_step_scale=a.time_step_scale)
 
 
 def scheme_warnings(deck: Deck) -> list[str]:

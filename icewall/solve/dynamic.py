@@ -1,0 +1,291 @@
+"""The load drop at a held stroke, integrated in time with the wall's own mass.
+
+Where the static path under the held quantity has a limit point (`path._Mode.located`:
+displacement control fails beyond a located limit), a stroke-controlled test holds its stroke
+while the wall's resistance falls, and the wall moves, with its own mass, to the state it comes
+to rest in; the load cell records the vertical drop of the stroke curve. Inertia selects that
+state. The motion is integrated by generalized-alpha (`solve.integrator`), each time step the
+static Newton iteration of every step (`newton.newton_increment`) with the inertia and damping
+as an extra force and in its matrix, converged to the deck's tolerances and committed: the
+laws, the pairs and friction follow the motion. The held stroke (its row fixes the jack load,
+the bordering of eq. 3.48) moves to the drop's target on a smooth ramp.
+
+M is the HRZ-lumped mass (`fem.mass`) of the deck's densities (plus a loading head's), C the
+mass-proportional Rayleigh damping 2 xi omega_1 M at the wall's first mode (omega_1 from the
+Rayleigh quotient of the static response to the jack loads at the run's first step). The time
+step follows a local error estimate (Zienkiewicz & Xie 1991: (beta - 1/6) dt^2 (a1 - a0) against
+the drop's motion) and the iteration count; `analysis.time_step_scale` scales every one. The
+drop ends where the kinetic energy is below KINETIC_END of the energy the drop put into motion
+and damping, and the static unbalance (inertia and damping forces taken out) meets the deck's
+load tolerance, or a static Newton step from there does and removes less than that: an
+equilibrium of the model at the held stroke, accepted on the same norms as every step. Its
+work terms are summed over the time steps (`DropEnergy`), so the energy balance of the run
+(external = stored + dissipated + damped + kinetic) stays closed through it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from icewall.errors import ConvergenceError
+from icewall.solve.control import Increment, PathState, StepFailed
+from icewall.solve.integrator import Dynamics, Motion, TimeStep, ramp
+from icewall.solve.newton import newton_increment, static_load_norm
+from icewall.solve.problem import Problem
+from icewall.solve.settings import SolverSettings
+
+log = logging.getLogger(__name__)
+
+STEPS_PER_PERIOD = 40
+"""The first time step of a drop: this fraction of the first period (the largest step stays
+free: as the motion dies out the error estimate lets it grow, and the integrator's high-
+frequency dissipation takes the wall to rest)."""
+TIME_TOLERANCE = 1e-2
+"""Local error of a time step, (beta - 1/6) dt^2 |a1 - a0|, against the displacement the drop
+has made so far (times time_step_scale^3: the steps scale with it)."""
+TARGET_ITERATIONS = 6
+"""Time steps converged in more Newton iterations than this shrink the next one."""
+STEP_ITERATIONS = 12
+"""A time step not converged in this many Newton iterations (or the deck's limit, if lower)
+is retried with half the time step: a shorter step crosses fewer kinks of the laws, and a
+failed try costs less than the static limit."""
+KINETIC_END = 1e-2
+"""The drop ends once the kinetic energy is below this fraction of the energy it put into
+motion (kinetic + damped so far) and a static Newton step from there meets the deck's
+tolerances: the equilibrium the motion has settled about."""
+CHECK_EVERY = 5
+"""Time steps between two tries of that static step."""
+CHECK_ITERATIONS = 10
+"""Newton iterations of that static step: it starts next to an equilibrium or not at all."""
+MAX_TIME_STEPS = 5000
+"""Time steps of one drop before it counts as failed."""
+SMALLEST_STEP = 1e-6
+"""A time step below this fraction of the first period that still fails ends the drop."""
+RAMP_PERIODS = 1.0
+"""The held quantity moves from where the static path left it to the drop's target over this
+many first periods, on a smooth (1 - cos) ramp: the stroke of a test moves on while the wall
+begins to fall. (A jump would impose an infinite acceleration on the held point.)"""
+
+
+@dataclass
+class DropEnergy:
+    """Work terms of one drop summed over its time steps (N mm)."""
+
+    external: float = 0.0
+    internal: dict[str, float] = field(default_factory=dict)
+    friction: float = 0.0
+    damping: float = 0.0
+    kinetic: float = 0.0  # at the end
+    largest_kinetic: float = 0.0
+
+    def add(self, problem: Problem, before: Increment | PathState, after: Increment,
+            step: TimeStep, motion: Motion, F_pre: np.ndarray) -> None:
+        """A committed time step: the trapezoidal work of the loads, the stresses and the
+        damping, the friction work and the kinetic energy at its end."""
+        self._static_terms(problem, before, after, F_pre)
+        v_mean = 0.5 * (step.start.v + motion.v)
+        self.damping += float(problem.constraints.restrict(step.damping * v_mean)
+                              @ (after.u - before.u))
+        self.kinetic = 0.5 * float(motion.v @ (step.mass * motion.v))
+        self.largest_kinetic = max(self.largest_kinetic, self.kinetic)
+
+    def close(self, problem: Problem, before: Increment, after: Increment,
+              F_pre: np.ndarray) -> None:
+        """The static step that ends the drop: its work terms; `kinetic` becomes what it took
+        out of the account (the kinetic energy left and the work of the forces the inertia
+        held)."""
+        self.kinetic += self.net_work(problem, before, after, F_pre)
+        self._static_terms(problem, before, after, F_pre)
+
+    def net_work(self, problem: Problem, before: Increment, after: Increment,
+                 F_pre: np.ndarray) -> float:
+        """Trapezoidal work of the loads less that of the stresses from `before` to `after`."""
+        probe = DropEnergy()
+        probe._static_terms(problem, before, after, F_pre, friction=False)
+        return probe.external - sum(probe.internal.values())
+
+    def _static_terms(self, problem: Problem, before: Increment | PathState, after: Increment,
+                      F_pre: np.ndarray, friction: bool = True) -> None:
+        R, du = problem.reference_load, after.u - before.u
+        self.external += float((0.5 * (before.load_factor + after.load_factor) * R + F_pre)
+                               @ du)
+        dV = problem.structure.kinematics.dV
+        s0, s1 = before.evaluation.stress, after.evaluation.stress
+        e0, e1 = before.evaluation.strain, after.evaluation.strain
+        for group in problem.structure.groups:
+            cells = group.cells
+            density = np.einsum("eqi,eqi->eq", 0.5 * (s0[cells] + s1[cells]), e1[cells] -
+                                e0[cells])
+            self.internal[group.name] = self.internal.get(group.name, 0.0) + float(
+                np.sum(density * dV[cells]))
+        if friction:
+            self.friction += float(problem.constraints.friction_work_increment())
+
+
+def dynamic_drop(problem: Problem, settings: SolverSettings, state: PathState, control,
+                 preload: float, dynamics: Dynamics) -> Increment:
+    """Integrate the wall's motion under `control`'s held quantity from rest at `state` until
+    it comes to rest; return the equilibrium it ends at, with the drop's time steps, largest
+    kinetic energy and work terms (`Increment.path_energy`). StepFailed where a time step
+    fails at SMALLEST_STEP of the period or MAX_TIME_STEPS do not bring it to rest."""
+    drop = _Drop(problem, settings, state, control, preload, dynamics)
+    while drop.steps < MAX_TIME_STEPS:
+        if not drop.advance():
+            continue
+        end = drop.at_rest()
+        if end is not None:
+            return end
+    raise StepFailed(f"dynamic drop: not at rest after {MAX_TIME_STEPS} time steps "
+                     f"(t = {drop.time:.4g} s, kinetic energy {drop.energy.kinetic:.3g} N mm)",
+                     "non-convergence")
+
+
+class _Drop:
+    """The state of one dynamic drop between its time steps."""
+
+    def __init__(self, problem: Problem, settings: SolverSettings, state: PathState, control,
+                 preload: float, dynamics: Dynamics) -> None:
+        c = problem.constraints
+        self.problem, self.start, self.preload = problem, state, preload
+        self.settings = replace(settings, max_iterations=min(settings.max_iterations,
+                                                             STEP_ITERATIONS))
+        self.static_settings = settings
+        self.F_pre = (np.zeros_like(state.u) if problem.preload is None
+                      else preload * problem.preload)
+        self.mass, self.damping = c.restrict(dynamics.mass), c.restrict(dynamics.damping)
+        self.scheme, self.period = dynamics.scheme, dynamics.period
+        scale = dynamics.time_step_scale
+        self.dt = scale * self.period / STEPS_PER_PERIOD
+        self.tolerance = TIME_TOLERANCE * scale ** 3
+        zero = np.zeros_like(state.u)
+        self.motion, self.r0 = Motion(state.u, zero, zero), zero
+        self.control, self.held_from = control, control.measure(state.u)
+        self.ramp_time = RAMP_PERIODS * self.period
+        # the drop's displacement scale before it has moved: the state scaled to the advance
+        # of the held quantity (from rest, the error estimate is of the order of the motion)
+        self.reference = float(np.linalg.norm(state.u)) * abs(
+            control.target - self.held_from) / max(abs(self.held_from), abs(control.target),
+                                                    1e-300)
+        if state.evaluation is None:  # resumed from a checkpoint: its stresses and strains
+            state = replace(state, evaluation=problem.structure.evaluate(state.u, state.states))
+            self.start = state
+        self.current: Increment | PathState = state
+        self.energy, self.iterations, self.steps, self.time = DropEnergy(), 0, 0, 0.0
+        self.next_check = 0
+
+    def held(self, time: float):
+        """The held quantity's control at `time` (the ramp from where the drop began)."""
+        advance = self.control.target - self.held_from
+        return replace(self.control, target=self.held_from + advance * ramp(time,
+                                                                             self.ramp_time))
+
+    def advance(self) -> bool:
+        """Try one time step of the current dt: True and committed where it converged within
+        the local error, else rolled back with a shorter dt."""
+        c, s = self.problem.constraints, self.scheme
+        history = s.alpha_f / (1.0 - s.alpha_f) * (self.damping * self.motion.v - self.r0)
+        step = TimeStep(self.mass, self.damping, self.dt, s, self.motion, history)
+        try:
+            inc = newton_increment(self.problem, self.settings, self._state(),
+                                   self.held(self.time + self.dt), self.preload, dampers=step)
+        except (StepFailed, ConvergenceError) as exc:
+            c.rollback()
+            self._shorter(0.5, exc)
+            return False
+        end = step.motion(inc.u)
+        moved = max(float(np.linalg.norm(inc.u - self.start.u)), self.reference)
+        ratio = step.local_error(end.a) / max(self.tolerance * moved, 1e-300)
+        if ratio > 1.0 and self.dt > SMALLEST_STEP * self.period:
+            c.rollback()
+            self.dt *= max(0.25, 0.9 * ratio ** (-1.0 / 3.0))
+            return False
+        c.commit()
+        self.steps, self.time = self.steps + 1, self.time + self.dt
+        self.iterations += inc.iterations
+        self.energy.add(self.problem, self.current, inc, step, end, self.F_pre)
+        self.r0 = _static_unbalance(self.problem, inc, self.F_pre)
+        self.motion, self.current = end, inc
+        growth = min(2.0, max(0.5, 0.9 * max(ratio, 1e-12) ** (-1.0 / 3.0)))
+        if inc.iterations > TARGET_ITERATIONS:
+            growth = min(growth, math.sqrt(TARGET_ITERATIONS / inc.iterations))
+        self.dt *= growth
+        return True
+
+    def _shorter(self, factor: float, exc: Exception) -> None:
+        self.dt *= factor
+        if self.dt < SMALLEST_STEP * self.period:
+            raise StepFailed(f"dynamic drop: a time step of {self.dt / factor:.3g} s (below "
+                             f"{SMALLEST_STEP:g} of the first period) failed at t = "
+                             f"{self.time:.4g} s ({exc})",
+                             getattr(exc, "reason", "non-convergence")) from None
+
+    def at_rest(self) -> Increment | None:
+        """The drop's end where the wall has come to rest: past the ramp, the kinetic energy
+        below KINETIC_END of the energy put into motion, and the static unbalance of the state
+        within the load tolerance, or a static Newton step from it (the held quantity fixed,
+        at most CHECK_ITERATIONS) converging to the deck's tolerances. None (rolled back)
+        otherwise."""
+        e = self.energy
+        if (self.time < self.ramp_time or self.steps < self.next_check
+                or e.kinetic > KINETIC_END * (e.kinetic + e.damping)):
+            return None
+        static = static_load_norm(self.problem, self.current, self.start.load_scale)
+        if static <= self.settings.tolerance_load:  # at rest as it stands
+            return _ended(self.current, static, self.iterations, self.steps, self.time,
+                          self.energy, self.start)
+        self.next_check = self.steps + CHECK_EVERY
+        check = replace(self.static_settings, max_iterations=min(
+            self.static_settings.max_iterations, CHECK_ITERATIONS))
+        c = self.problem.constraints
+        try:
+            inc = newton_increment(self.problem, check, self._state(), self.held(self.time),
+                                   self.preload)
+        except (StepFailed, ConvergenceError):
+            c.rollback()
+            return None
+        # the static step takes the vibration left out of the account: its kinetic energy and
+        # the work of the forces the inertia held (the strain energy of the oscillation); the
+        # drop has ended only where that is below KINETIC_END of the energy it moved
+        removed = e.kinetic + self.energy.net_work(self.problem, self.current, inc, self.F_pre)
+        if abs(removed) > KINETIC_END * (e.kinetic + e.damping):
+            c.rollback()
+            return None
+        c.commit()
+        self.energy.close(self.problem, self.current, inc, self.F_pre)
+        static = static_load_norm(self.problem, inc, self.start.load_scale)
+        return _ended(inc, static, self.iterations + inc.iterations, self.steps, self.time,
+                      self.energy, self.start)
+
+    def _state(self) -> PathState:
+        return _as_state(self.current, self.start)
+
+
+def _as_state(current: Increment | PathState, start: PathState) -> PathState:
+    """The committed state a time step starts from."""
+    if isinstance(current, PathState):
+        return current
+    return PathState(current.u, current.load_factor, current.evaluation.states,
+                     current.evaluation, current.preload_factor, start.load_scale)
+
+
+def _static_unbalance(problem: Problem, inc: Increment, F_pre: np.ndarray) -> np.ndarray:
+    """P R + F - f_int - G lam of a committed time step (equation space, fixed rows zero)."""
+    c = problem.constraints
+    applied = inc.load_factor * problem.reference_load + F_pre
+    return c.restrict(applied - inc.evaluation.internal_force - c.constraint_force())
+
+
+def _ended(inc: Increment, static: float, iterations: int, steps: int, time: float,
+           energy: DropEnergy, start: PathState) -> Increment:
+    log.info("dynamic drop: %d time steps (%.4g s), %d iterations, load factor %.6g -> %.6g, "
+             "largest kinetic energy %.4g N mm", steps, time, iterations, start.load_factor,
+             inc.load_factor, energy.largest_kinetic)
+    inc.iterations, inc.load_norm = iterations, static
+    inc.forensics["time_steps"] = [steps]
+    inc.forensics["drop_duration_us"] = [int(round(time * 1e6))]
+    inc.path_energy = energy
+    return inc
