@@ -310,55 +310,6 @@ def params(deck: str, overrides: tuple[str, ...], profile: str | None, as_json: 
 
 
 @main.command()
-@click.option("--fc", type=click.FloatRange(0.0, 1000.0, min_open=True), required=True,
-              help="Uniaxial compressive strength f'c (MPa).")
-@click.option("--h-c", "h_c", type=click.FloatRange(0.0, 1e5, min_open=True), default=100.0,
-              show_default=True,
-              help="Crack-band width h_c (mm) for k_t, k_c (eqs. 3.29, 3.34).")
-@click.option("--path", "path", default="uniaxial-compression", show_default=True,
-              help="uniaxial-compression | uniaxial-tension | biaxial:R | biaxial-tension:R | "
-                   "biaxial-strain:R | pure-shear | rotating")
-@click.option("--formulation", default="plane_stress", show_default=True,
-              type=click.Choice(["plane_stress", "plane_strain", "axisymmetric"]))
-@click.option("--steps", type=click.IntRange(1, 1_000_000), default=400, show_default=True)
-@click.option("--max-strain", type=click.FloatRange(0.0, 1.0, min_open=True), default=0.006,
-              show_default=True,
-              help="Final control strain magnitude.")
-@click.option("--unload-at", type=float, multiple=True,
-              help="Control strain at which to unload to zero and reload (repeatable).")
-@click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default=None,
-              help="Write the stress-strain path to this CSV file ('-' for stdout).")
-@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-@click.option("--trial-stress", default="corotational", show_default=True,
-              type=click.Choice(["corotational", "incremental", "total"]),
-              help="Fig. 3.12 step-3 trial stress (the deck's materials.concrete.trial_stress).")
-@_handle_errors
-def point(fc: float, h_c: float, path: str, formulation: str, steps: int, max_strain: float,
-          unload_at: tuple[float, ...], csv_path: str | None, as_json: bool,
-          trial_stress: str) -> None:
-    """Drive one concrete material point along a strain path (no mesh)."""
-    from icewall.materials.parameters import derive_concrete_parameters
-    from icewall.materials.point import run_path
-
-    try:
-        params = derive_concrete_parameters(fc, h_c)
-        result = run_path(path, params, formulation, n_steps=steps, max_strain=max_strain,
-                          unload_at=unload_at, trial_stress=trial_stress)
-    except (ValueError, ArithmeticError) as exc:
-        raise click.BadParameter(str(exc) or type(exc).__name__) from None
-    if csv_path == "-":
-        result.to_csv(sys.stdout)
-    elif csv_path:  # through icewall.safe_write: no link followed, no other file replaced
-        result.to_csv(csv_path)
-    summary = result.summary()
-    if as_json:
-        click.echo(json.dumps(summary, indent=2, default=float))
-    elif csv_path != "-":
-        for key, value in summary.items():
-            click.echo(f"{key:>28}: {value}")
-
-
-@main.command()
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Write to a file instead of standard output.")
 @_handle_errors
@@ -375,10 +326,11 @@ def schema(output: str | None) -> None:
 
 
 # commands in their own modules (registered after main and _handle_errors are defined)
+from icewall.cli_point import point  # noqa: E402
 from icewall.cli_post import export, plot, report  # noqa: E402
 from icewall.cli_study import convergence  # noqa: E402
 
-for _command in (plot, export, report, convergence):
+for _command in (point, plot, export, report, convergence):
     _command.callback = _handle_errors(_command.callback)
     main.add_command(_command)
 

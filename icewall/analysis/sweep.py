@@ -50,6 +50,7 @@ from icewall.deck.yamlsrc import load_yaml
 from icewall.errors import DeckError, Interrupted, ResultError
 from icewall.pipeline import run_stamp
 from icewall.results.reader import open_result
+from icewall.results.writer import refuse_output_links
 from icewall.safe_write import Kind, check_replaceable
 
 FINISHED = ("completed", "stopped")
@@ -295,6 +296,8 @@ def sweep_command(decks: Iterable[str] = (), sweep_file: str | None = None,
         validate_jobs(jobs)
         return 0
     make_output_directory(outdir)
+    for job in jobs:  # a link or another file at a run's output: refused before any run
+        refuse_output_links(job.output)
     width = max(len(job.name) for job in jobs)
     results, todo = _skip_finished(jobs, force, width, say)
 

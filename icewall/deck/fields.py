@@ -108,6 +108,12 @@ def _convert(value: Any, tp: Any, meta: dict, ctx: Context, line: int | None, pa
             raise ctx.error(f"expected a string, got {short_repr(value)}", line, path)
         if "\x00" in value:
             raise ctx.error("a NUL character is not allowed in a string", line, path)
+        try:
+            value.encode("utf-8")
+        except UnicodeEncodeError as exc:  # an escaped lone surrogate ("\ud83e")
+            raise ctx.error(f"character U+{ord(value[exc.start]):04X} at {exc.start} is half "
+                            "of a surrogate pair, not text (write the character itself)",
+                            line, path) from None
     _check_limits(value, meta, ctx, line, path)
     return value
 

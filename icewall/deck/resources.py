@@ -87,7 +87,7 @@ def estimate(deck: Deck) -> Estimate:
     output = step_bytes * n_stored + BYTES_PER_FLOAT * 24 * n_steps + 64.0 * n_nodes
     its = NONLINEAR_ITERATIONS_PER_STEP if analysis.solver == "nonlinear" else 1
     # seconds per iteration: Python overhead, element loops (vectorized), sparse factorization
-    per_iteration = 0.02 + 1.5e-4 * n_el + 1e-8 * n_eq ** 1.5
+    per_iteration = 0.02 + 1.5e-4 * n_el + 1e-8 * min(n_eq, 1e100) ** 1.5  # (no overflow)
     hours = n_steps * its * per_iteration / 3600.0
     return Estimate(n_steps=n_steps, n_steps_with_cuts=n_preload + n_control * 2 **
                     analysis.max_step_cuts, n_elements=_count(n_el), n_equations=_count(n_eq),

@@ -51,10 +51,12 @@ def validate(deck: Deck, fail: ErrorFactory) -> None:
         raise fail("plane-stress plates are an option of plane-strain (or plane-stress) "
                    "analyses only", "materials.steel.formulation")
     _check_fixed_points(deck, fail)
+    check_physical(deck, fail)  # (before the cost estimate: 1e308 is a slip, not a big run)
     _check_mesh_size(deck, fail)
     if len(set(deck.outputs.fields)) != len(deck.outputs.fields):
         raise fail("a field is listed twice", "outputs.fields")
-    check_physical(deck, fail)  # (analysis.allow_unphysical: warnings instead)
+    if not deck.outputs.directory.strip():  # as -o '': it wrote into the working directory
+        raise fail("is empty: write '.' for the working directory", "outputs.directory")
 
 
 def _check_section(geo: Geometry, fail: ErrorFactory) -> None:
@@ -143,8 +145,15 @@ def _check_mesh_size(deck: Deck, fail: ErrorFactory) -> None:
             raise fail(f"{message} (analysis.allow_large: true runs it anyway)", key)
 
 
+MAX_NAME = 200
+"""Longest specimen name (it names the result file, at most 255 bytes on most filesystems)."""
+
+
 def _check_name(name: str, fail: ErrorFactory) -> None:
-    """The specimen name also names the result file: no control characters."""
+    """The specimen name also names the result file: no control characters, not too long."""
+    if len(name) > MAX_NAME:
+        raise fail(f"{len(name)} characters, longer than {MAX_NAME} (it names the result "
+                   "file)", "specimen.name")
     bad = sorted({c for c in name if ord(c) < 32 or ord(c) == 127})
     if bad:
         raise fail(f"control character(s) {', '.join(repr(c) for c in bad)} in the name "

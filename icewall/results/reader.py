@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -79,6 +80,24 @@ def non_finite_error(path: str, dataset: str, values: np.ndarray,
                        "writes no NaN or infinity)")
 
 
+STATUSES = ("completed", "stopped", "failed", "running")
+MAX_LABEL = 200  # the deck's longest specimen name (deck.validate.MAX_NAME)
+
+
+def _check_labels(path: str, attrs: dict) -> None:
+    """ResultError on a status icewall does not write, or a specimen name no deck gives (too
+    long, control characters): what every reader prints or draws as a title."""
+    if attrs.get("status", "running") not in STATUSES:
+        raise ResultError(f"{path}: damaged result file: status "
+                          f"{' '.join(str(attrs.get('status')).split())[:40]!r} is none of "
+                          f"{', '.join(STATUSES)}")
+    name = attrs.get("specimen", "")
+    if not isinstance(name, str) or len(name) > MAX_LABEL or any(
+            ord(c) < 32 or ord(c) == 127 for c in name):
+        raise ResultError(f"{path}: damaged result file: attribute specimen is not a name "
+                          f"(at most {MAX_LABEL} characters, no control character)")
+
+
 def _check_finite(path: str, attrs: dict, history: dict[str, np.ndarray]) -> None:
     """ResultError on a non-finite number where icewall writes none: a float attribute, a
     core history column, an extra column beyond its NaN fill (an infinity)."""
@@ -97,6 +116,24 @@ def _check_finite(path: str, attrs: dict, history: dict[str, np.ndarray]) -> Non
                                    steps)
 
 
+def _checked_mesh(path: str, mesh: Mesh) -> Mesh:
+    """`mesh` if its coordinates are finite and its node numbers name its nodes."""
+    points = np.asarray(mesh.points)
+    if points.ndim != 2 or points.shape[1] != 2 or points.dtype.kind != "f":
+        raise ResultError(f"{path}: damaged result file: mesh/points is not (n, 2) numbers")
+    if not np.isfinite(points).all():
+        raise non_finite_error(path, "mesh/points", points)
+    n = len(points)
+    for name, ids in [("cells", mesh.cells), ("interface/pairs", mesh.interface_pairs),
+                      *((f"node_sets/{k}", v) for k, v in mesh.node_sets.items()),
+                      *((f"edge_sets/{k}", v) for k, v in mesh.edge_sets.items())]:
+        ids = np.asarray(ids)
+        if ids.size and (ids.dtype.kind not in "iu" or ids.min() < 0 or ids.max() >= n):
+            raise ResultError(f"{path}: damaged result file: mesh/{name} names nodes outside "
+                              f"0..{n - 1}")
+    return mesh
+
+
 class ResultFile:
     """An open result file. Use as a context manager or call close()."""
 
@@ -108,6 +145,8 @@ class ResultFile:
                 hint = (f" (an unfinished run left {self.path + PARTIAL_SUFFIX}; open that, or "
                         "go on with it: icewall run DECK --resume)")
             raise ResultError(f"result file {self.path} not found{hint}")
+        if not stat.S_ISREG(os.stat(self.path).st_mode):  # a FIFO would block HDF5 forever
+            raise ResultError(f"{self.path}: not a result file (not a regular file)")
         try:
             self._f = _open(self.path)
         except OSError as exc:
@@ -127,6 +166,7 @@ class ResultFile:
             self._n = _checked_n_steps(self.path, self.attrs, self._f["history"])
             self.history = {k: ds[: self._n] for k, ds in self._f["history"].items()}
             _check_finite(self.path, self.attrs, self.history)
+            _check_labels(self.path, self.attrs)
             last = int(self.history["step"][-1]) if self._n else 0
             self.steps = sorted(s for s in (int(k) for k in self._f["steps"]) if s <= last)
         except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
@@ -205,23 +245,31 @@ class ResultFile:
 
     @property
     def mesh(self) -> Mesh:
+        """The stored mesh; ResultError where it is damaged (a group missing, a coordinate not
+        finite, a node number out of range)."""
         if self._mesh is None:
-            g = self._f["mesh"]
-            r = g["regions"]
-            names, kinds = r["name"].asstr()[:], r["kind"].asstr()[:]
-            regions = tuple(Region(str(n), str(k), int(t))
-                            for n, k, t in zip(names, kinds, r["tag"][:], strict=True))
-            self._mesh = Mesh(
-                points=g["points"][:], cells=g["cells"][:],
-                cell_type=_py(g["cells"].attrs["cell_type"]), cell_region=g["cell_region"][:],
-                regions=regions,
-                node_sets={k: ds[:] for k, ds in g["node_sets"].items()},
-                edge_sets={k: ds[:] for k, ds in g["edge_sets"].items()},
-                interface_pairs=g["interface/pairs"][:],
-                interface_normals=g["interface/normals"][:],
-                interface_corner=g["interface/corner"][:].astype(bool),
-            )
+            try:
+                self._mesh = _checked_mesh(self.path, self._read_mesh())
+            except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
+                raise _damaged(self.path, exc) from None
         return self._mesh
+
+    def _read_mesh(self) -> Mesh:
+        g = self._f["mesh"]
+        r = g["regions"]
+        names, kinds = r["name"].asstr()[:], r["kind"].asstr()[:]
+        regions = tuple(Region(str(n), str(k), int(t))
+                        for n, k, t in zip(names, kinds, r["tag"][:], strict=True))
+        return Mesh(
+            points=g["points"][:], cells=g["cells"][:],
+            cell_type=_py(g["cells"].attrs["cell_type"]), cell_region=g["cell_region"][:],
+            regions=regions,
+            node_sets={k: ds[:] for k, ds in g["node_sets"].items()},
+            edge_sets={k: ds[:] for k, ds in g["edge_sets"].items()},
+            interface_pairs=g["interface/pairs"][:],
+            interface_normals=g["interface/normals"][:],
+            interface_corner=g["interface/corner"][:].astype(bool),
+        )
 
     def _step_group(self, step: int) -> h5py.Group:
         if step not in self.steps:

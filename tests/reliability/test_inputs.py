@@ -6,7 +6,10 @@ file whose stored deck no longer loads gets one rule from every reader."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import subprocess
+import sys
 
 import h5py
 import pytest
@@ -171,3 +174,69 @@ def test_a_damaged_overrides_attribute_is_named(linear_result, tmp_path):
     line = _one_line(invoke("compare", tmp_path / "runs", "--baseline", tmp_path / "b.yaml",
                             "--update"))
     assert path in line and "deck_overrides" in line
+
+
+# -- what the second probe of issue 38 found besides ------------------------------------------
+def test_an_escaped_lone_surrogate_in_a_deck_string(tmp_path):
+    """json.dumps("CF-4 \U0001f9ca") writes "\\ud83e\\uddca", which YAML reads as two lone
+    surrogates: the result file could not be written (an internal UnicodeEncodeError)."""
+    path = _deck(tmp_path, "name: CF-4", 'name: "CF-4 \\ud83e\\uddca"')
+    line = _one_line(invoke("check", path))
+    assert "specimen.name" in line and "surrogate" in line
+
+
+def test_a_specimen_name_too_long_for_a_file_name(tmp_path):
+    line = _one_line(invoke("check", _deck(tmp_path, "name: CF-4", "name: " + "x" * 300)))
+    assert "specimen.name" in line and "300 characters" in line
+
+
+def _damaged_attr(result, tmp_path, name, value) -> str:
+    copy = tmp_path / "r.h5"
+    shutil.copy(result, copy)
+    with h5py.File(copy, "r+") as f:
+        f.attrs[name] = value
+    return str(copy)
+
+
+@pytest.mark.parametrize(("attr", "value"), [("status", "\x1b[31mcompleted"),
+                                             ("specimen", "x" * 100000),
+                                             ("specimen", "CF\x1b[2J-4")])
+@pytest.mark.parametrize("reader", ["summary", "plot", "report"])
+def test_a_tampered_label_is_one_line_in_every_reader(linear_result, tmp_path, attr, value,
+                                                      reader):
+    """A 100000-character specimen name made plot and report lay out their title for ever;
+    an escape sequence in the status reached the terminal."""
+    path = _damaged_attr(linear_result, tmp_path, attr, value)
+    args = {"summary": [], "plot": ["-o", str(tmp_path / "p"), "--format", "png"],
+            "report": ["-o", str(tmp_path / "r.html")]}[reader]
+    done = subprocess.run([sys.executable, "-m", "icewall.cli", reader, path, *args],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, done.stderr
+    assert ("attribute specimen" if attr == "specimen" else "status") in lines[0]
+    assert "\x1b" not in done.stdout + done.stderr
+
+
+def test_a_fifo_named_as_a_result_does_not_block(tmp_path):
+    fifo = tmp_path / "r.h5"
+    os.mkfifo(fifo)
+    done = subprocess.run([sys.executable, "-m", "icewall.cli", "summary", str(fifo)],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "not a regular file" in done.stderr
+
+
+@pytest.mark.parametrize(("args", "hint"), [(["--path", "biaxial:nan"], "--path"),
+                                            (["--path", "biaxial:1e308"], "--path"),
+                                            (["--unload-at", "nan"], "--unload-at"),
+                                            (["--unload-at", "-1"], "--unload-at")])
+def test_point_refuses_a_ratio_or_unloading_strain_it_would_ignore(args, hint):
+    """A NaN stress ratio gave zero stresses, 1e308 printed NumPy's overflow warnings, an
+    unloading strain off the path was dropped without a word."""
+    line = _one_line(invoke("point", "--fc", "40", "--steps", "20", *args))
+    assert hint in line
+
+
+def test_an_empty_output_directory_in_a_deck_is_refused():
+    line = _one_line(invoke("check", CF4, "--set", "outputs.directory=''"))
+    assert "outputs.directory" in line

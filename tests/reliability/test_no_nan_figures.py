@@ -16,7 +16,6 @@ import pytest
 from reliability_support import CF4, LINEAR, error_lines, invoke
 
 from icewall.analysis.compare import compare, compare_command, mean_ratio
-from icewall.analysis.summary import finite_figures
 from icewall.errors import ResultError
 
 
@@ -86,6 +85,8 @@ def test_summary_json_is_strict_json(linear_result):
 
 
 def test_an_undefined_derived_figure_is_none():
+    from icewall.analysis.summary import finite_figures
+
     assert finite_figures({"a": math.inf, "b": [math.nan, 1.5], "c": {"d": -math.inf},
                            "e": "nan"}) == {"a": None, "b": [None, 1.5], "c": {"d": None},
                                             "e": "nan"}

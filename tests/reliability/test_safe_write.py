@@ -32,6 +32,8 @@ def runs(tmp_path_factory) -> Path:
 CASES = {
     "sweep-table": (lambda d, r: ["sweep", CF4, *QUICK, "-j", "1", "-q", "-o", str(d)],
                     "sweep_summary.csv"),
+    "sweep-result": (lambda d, r: ["sweep", CF4, *QUICK, "-j", "1", "-q", "-o", str(d)],
+                     "cf4.h5"),
     "report": (lambda d, r: ["report", str(r / "cf4.h5"), "-o", str(d / "report.html")],
                "report.html"),
     "plot-png": (lambda d, r: ["plot", str(r / "cf4.h5"), "-o", str(d), "--format", "png"],
