@@ -170,6 +170,9 @@ class Concrete:
         "sub-stepped); total = committed secant matrix times the total strain (older default: "
         "not consistent once nu has grown by eq. 3.19, which can let the iteration jump to "
         "spurious all-cracked states)", choices=("corotational", "incremental", "total"))
+    density: float = option(2.4e-9, doc="mass density (normal-weight concrete, 2400 kg/m^3) "
+                            "for the inertia of dynamic drops; N, mm, s, t: 1 N = 1 t mm/s^2",
+                            unit="t/mm^3", minimum=0.0, maximum=1e-7)
     nu_max: float = option(0.49, doc="limit of Poisson's ratio, eqs. 3.19-3.20 (3.2.6: 'the "
                            "incompressible limit of 0.5 is retained'; default below it, errata "
                            "§3: at 0.5 eq. 3.3d's phi vanishes in triaxial compression and "
@@ -211,12 +214,18 @@ class Steel:
     fy_reduction: float = option(0.0, doc="fraction by which f_y is reduced (the thesis' "
                                  "CF-8 work-around for plane-stress plates: 0.111)",
                                  minimum=0.0, maximum=0.9)
+    density: float = option(7.85e-9, doc="mass density (steel, 7850 kg/m^3) for the inertia "
+                            "of dynamic drops; N, mm, s, t: 1 N = 1 t mm/s^2", unit="t/mm^3",
+                            minimum=0.0, maximum=1e-7)
 
 
 @dataclass(frozen=True, kw_only=True)
 class Elastic:
     E: float = option(200000.0, doc="Young's modulus", unit="MPa", exclusive_minimum=0.0)
     nu: float = option(0.3, doc="Poisson's ratio", minimum=0.0, maximum=0.49)
+    density: float = option(7.85e-9, doc="mass density (steel, 7850 kg/m^3) for the inertia "
+                            "of dynamic drops; N, mm, s, t: 1 N = 1 t mm/s^2", unit="t/mm^3",
+                            minimum=0.0, maximum=1e-7)
 
 
 FIXED_POINT_PLACEMENTS = ("top", "corners", "bottom_support")
@@ -308,6 +317,10 @@ class Control:
         "sum P_i: the stroke of a loading head that drives the patches through a distribution "
         "beam, as in the TF tests, thesis 4.2.2: 'Stroke control was used')",
         choices=("deflection", "stroke"))
+    head_mass: float = option(0.0, doc="mass of the loading head or distribution beam that "
+                              "moves with the patches (0: none), lumped on the loaded nodes in "
+                              "proportion to their load; it acts in dynamic drops only (N, "
+                              "mm, s, t)", unit="t", minimum=0.0)
 
 
 @dataclass(frozen=True, kw_only=True)
