@@ -161,6 +161,16 @@ class Concrete:
         "whose area sigma_ic / k is the energy of eqs. 3.26-3.30) no longer moves with the "
         "other stresses and its stress is continuous where it turns from unloading to "
         "loading", choices=("ray", "peak"))
+    fallen_strength: str = option(
+        "envelope", doc="a principal direction that loads again (|eps_iu| past its maximum) "
+        "where the envelope on its new ray lies below its secant line at that maximum (its "
+        "strength has fallen since it was committed): envelope = onto that envelope, as Fig. "
+        "3.12 step 6 reads (the stress jumps down where it turns from unloading to loading, "
+        "and no equilibrium need exist next to that point); scaled = along the new envelope "
+        "scaled through the committed point (sigma = sigma_env(eps) E_i max|eps_iu| / "
+        "sigma_env(max|eps_iu|)): continuous, the same law on a fixed ray, and past the peak "
+        "the exponential decay of eq. 3.11 from the stress the point has, so that the energy "
+        "it dissipates is sigma / k of eqs. 3.26-3.30", choices=("envelope", "scaled"))
     trial_stress: str = option(
         "corotational", doc="trial stress of Fig. 3.12 step 3: corotational = committed "
         "principal stresses carried with the rotating axes plus C dEps between the committed "

@@ -14,7 +14,9 @@ Fig. 3.12 from the committed state to the given total strain:
      once nu has grown, see tests/materials/test_concrete_solver_options.py).
 4.   eps_iu = sigma_lt,i / E_i with the secant E_i (errata 1.1 on eq. 3.8: step 4, not 3.8).
 5.   sigma_ic, eps_ic from the ultimate surfaces on the ray of the trial stress (errata 1.3);
-     with `post_peak_strength: peak` a direction past its peak keeps its committed ones.
+     with `post_peak_strength: peak` a direction past its peak keeps its committed ones; with
+     `fallen_strength: scaled` an envelope that has fallen below the direction's secant line
+     at its max |eps_iu| is scaled through that point (continuous reloading).
 6.   Per direction: loading (|eps_iu| beyond its maximum) follows eqs. 3.9-3.11 and updates the
      secant E_i, nu_i (3.19-3.20); unloading keeps E_i, nu_i (Fig. 3.13). A direction past
      its peak on the other sign's branch (a closing crack, a crushed direction in tension)
@@ -43,6 +45,7 @@ from icewall.materials.concrete_formulas import (
     keeps_peak,
     loads,
     loads_across_zero,
+    scaled_envelope,
     shear_modulus,
 )
 from icewall.materials.concrete_state import ConcreteState
@@ -59,7 +62,7 @@ from icewall.materials.orthotropic import (
     orthotropic_normal_stiffness,
     principal_strain_angle,
 )
-from icewall.materials.uniaxial import compression_envelope, tension_envelope
+from icewall.materials.uniaxial import SECANT_FLOOR, compression_envelope, tension_envelope
 
 LOADING_TOLERANCE = 1e-10
 """Margin on max |eps_iu| (relative to the point's stress / E_i): a zero increment unloads and
@@ -214,6 +217,14 @@ def _curve_parameters(trial: np.ndarray, eps_u: np.ndarray, loading: np.ndarray,
                                       peak_strain[loads])
         envelope_stress[loads], envelope_secant[loads] = _envelope(
             eps_u[loads], strength[loads], peak_strain[loads], params, loads)
+        if getattr(params, "fallen_strength", "envelope") == "scaled":
+            max_eps_u = state.max_equivalent_uniaxial_strain[loads]
+            at_max, _ = _envelope(np.copysign(max_eps_u, eps_u[loads]), strength[loads],
+                                  peak_strain[loads], params, loads)
+            envelope_stress[loads], envelope_secant[loads] = scaled_envelope(
+                envelope_stress[loads], envelope_secant[loads], at_max,
+                state.secant_modulus[loads] * max_eps_u, sign_change[loads], SECANT_FLOOR,
+                _point_column(params.E0, loads))
     return strength, peak_strain, envelope_stress, envelope_secant
 
 

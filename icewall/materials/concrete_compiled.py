@@ -90,7 +90,8 @@ def parameter_tuple(params: Any) -> tuple[float, ...]:
               params.compression_tension_rule == "equal", *surface.a, *surface.b,
               surface.sigma_limit, concrete.LOADING_TOLERANCE, uniaxial.SECANT_FLOOR,
               orthotropic.PHI_MIN, orthotropic.ANGLE_TOLERANCE,
-              params.mode_rule_band * params.ft, params.post_peak_strength == "peak"]
+              params.mode_rule_band * params.ft, params.post_peak_strength == "peak",
+              getattr(params, "fallen_strength", "envelope") == "scaled"]
     return tuple(float(v) for v in values)
 
 
@@ -128,7 +129,7 @@ def compiled_update(strain: np.ndarray, state: ConcreteState, params: Any, formu
     prm, k_t, k_c = parameter_tuple(params), _per_point(params.k_t, n), _per_point(params.k_c, n)
     mask = np.zeros(n, dtype=bool) if frozen is None else _kernel_array(frozen, bool)
     work, flags = np.empty((n, kernels.N_WORK, 3)), np.empty((n, kernels.N_FLAGS, 3), dtype=bool)
-    exponent = np.empty((n, 3))
+    exponent, exponent_at_max = np.empty((n, 3)), np.zeros((n, 3))
     lode_x, lode_y = np.empty(n), np.empty(n)
     # NumPy's arctan2 and exp between the passes, as principal_strain_angle, lode_angle and
     # softening_stress call them (SIMD code where NumPy has it: no libm call matches it)
@@ -136,8 +137,10 @@ def compiled_update(strain: np.ndarray, state: ConcreteState, params: Any, formu
                        trial_stress == "corotational", formulation == "plane_strain", prm, k_t,
                        k_c, out, work, flags, exponent)
     kernels.ray_pass(S, prm, work, flags, np.exp(-exponent), lode_x, lode_y)
-    kernels.strength_pass(S, prm, k_t, k_c, work, flags, np.arctan2(lode_y, lode_x), exponent)
-    kernels.finish_pass(S, mask, frozen is not None, prm, work, flags, np.exp(-exponent), out)
+    kernels.strength_pass(S, prm, k_t, k_c, work, flags, np.arctan2(lode_y, lode_x), exponent,
+                          exponent_at_max)
+    kernels.finish_pass(S, mask, frozen is not None, prm, work, flags, np.exp(-exponent),
+                        np.exp(-exponent_at_max), out)
     return out[1], ConcreteState(*out)
 
 

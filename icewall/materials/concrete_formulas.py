@@ -359,6 +359,21 @@ def keeps_peak(eps_u: Any, sign_change: Any, cracked: Any, crushed: Any) -> Any:
     return ~sign_change & select(eps_u > 0.0, cracked, crushed)
 
 
+def scaled_envelope(stress: Any, secant: Any, at_max: Any, line_at_max: Any, sign_change: Any,
+                    floor: float, E0: Any) -> tuple[Any, Any]:
+    """(stress, secant) magnitudes of a loading direction's envelope scaled through its
+    committed point (deck `fallen_strength: scaled`): where the envelope on the new ray at
+    max |eps_iu| (`at_max`) lies below the secant line there (`line_at_max` = E_i max|eps_iu|),
+    sigma = sigma_env line_at_max / at_max. Continuous where the direction turns from
+    unloading to loading, equal to the envelope on a fixed ray, and past the peak the decay
+    of eq. 3.11 from the stress the point has (its area sigma / k, eqs. 3.26-3.30). A risen
+    envelope (and a change of sign) keeps Fig. 3.12 step 6: the secant line until it meets
+    the envelope (`envelope_stress`'s heal), continuous too."""
+    fallen = ~sign_change & (at_max > 0.0) & (line_at_max > at_max)
+    scale = select(fallen, line_at_max / select(fallen, at_max, 1.0), 1.0)
+    return scale * stress, select(fallen, clip(scale * secant, floor * E0, E0), secant)
+
+
 def envelope_stress(trial: Any, eps_u: Any, secant: Any, loading: Any, sign_change: Any,
                     frozen: Any, stress: Any, envelope_secant: Any) -> tuple[Any, Any, Any]:
     """(loading, sigma_i, E_i) of step 6: on the envelope (stress, envelope_secant) where

@@ -47,6 +47,7 @@ from icewall.materials.concrete_formulas import (
     principal_angle,
     ray_function,
     ray_value,
+    scaled_envelope,
     shear_modulus,
     zero_component,
 )
@@ -57,7 +58,7 @@ from icewall.materials.concrete_jit import fma, jit
 (P_E0, P_NU0, P_NU_MAX, P_FC, P_FT, P_EPS_C, P_EPS_T, P_SLOPE, P_RULE_EQUAL,
  P_A0, P_A1, P_A2, P_B0, P_B1, P_B2, P_LIMIT,
  P_LOADING_TOLERANCE, P_SECANT_FLOOR, P_PHI_MIN, P_ANGLE_TOLERANCE, P_MODE_BAND,
- P_KEEP_PEAK) = range(22)
+ P_KEEP_PEAK, P_SCALED) = range(23)
 # rows of the (n, N_WORK, 3) work array carried between the passes: per direction, then
 # W_RAY: sigma_bar, tau_bar, max |p| of the unit ray; W_AXES: cos, sin of beta
 W_TRIAL, W_EPS_U, W_STRENGTH, W_PEAK, W_LOCAL, W_RAY, W_AXES = range(7)
@@ -240,11 +241,12 @@ def ray_pass(S, prm, W, B, decayed, lode_x, lode_y):
 
 
 @jit
-def strength_pass(S, prm, k_t, k_c, W, B, lode_atan, A):
+def strength_pass(S, prm, k_t, k_c, W, B, lode_atan, A, A_max):
     """Step 5 (errata 1.3) where a direction loads: sigma_ic on the ray (theta from lode_atan =
     arctan2(lode_y, lode_x)) with the mode rules, eps_ic (the committed ones past the peak
-    where P_KEEP_PEAK: concrete.past_peak), the exponents of their envelopes into A (else 0)."""
-    s_strength, s_peak, s_cracked, s_crushed = S[8], S[9], S[10], S[11]
+    where P_KEEP_PEAK: concrete.past_peak), the exponents of their envelopes into A (else 0),
+    at max |eps_iu| into A_max where P_SCALED."""
+    s_max, s_strength, s_peak, s_cracked, s_crushed = S[4], S[8], S[9], S[10], S[11]
     n = W.shape[0]
     rows, m = np.empty(n, np.int64), 0
     for i in range(n):
@@ -269,10 +271,13 @@ def strength_pass(S, prm, k_t, k_c, W, B, lode_atan, A):
                 W[i, W_STRENGTH, k], W[i, W_PEAK, k] = s_strength[i, k], s_peak[i, k]
             A[i, k] = decay_exponent(abs(eps_u), abs(W[i, W_PEAK, k]),
                                      k_t[i] if eps_u > 0.0 else k_c[i])
+            if prm[P_SCALED] != 0.0:
+                A_max[i, k] = decay_exponent(s_max[i, k], abs(W[i, W_PEAK, k]),
+                                             k_t[i] if eps_u > 0.0 else k_c[i])
 
 
 @jit
-def finish_pass(S, frozen, has_frozen, prm, W, B, decayed, O):
+def finish_pass(S, frozen, has_frozen, prm, W, B, decayed, decayed_max, O):
     """Step 6: the envelope (eqs. 3.9-3.11, decayed = exp(-A)) where loading, the secant kept
     where unloading (Fig. 3.13), nu (eqs. 3.19-3.20), G12 (eq. 3.21); the stress (steps 7-8
     without moduli) and the rest of the trial state into O."""
@@ -289,6 +294,13 @@ def finish_pass(S, frozen, has_frozen, prm, W, B, decayed, O):
                 env_stress, env_secant = envelope(abs(eps_u), abs(W[i, W_STRENGTH, k]),
                                                   abs(W[i, W_PEAK, k]), E0, decayed[i, k],
                                                   prm[P_SECANT_FLOOR])
+                if prm[P_SCALED] != 0.0:
+                    at_max = envelope(s_max[i, k], abs(W[i, W_STRENGTH, k]),
+                                      abs(W[i, W_PEAK, k]), E0, decayed_max[i, k],
+                                      prm[P_SECANT_FLOOR])[0]
+                    env_stress, env_secant = scaled_envelope(
+                        env_stress, env_secant, at_max, E * s_max[i, k],
+                        B[i, B_SIGN_CHANGE, k], prm[P_SECANT_FLOOR], E0)
             else:
                 env_stress, env_secant = abs(trial), E
             loading, W[i, W_LOCAL, k], o_secant[i, k] = envelope_stress(

@@ -61,6 +61,7 @@ from icewall.materials.concrete import (
     take_parameters,
     update_concrete,
 )
+from icewall.materials.concrete_formulas import scaled_envelope
 from icewall.materials.concrete_state import ConcreteState
 from icewall.materials.mode_rules import mode_rule_weights
 from icewall.materials.orthotropic import (
@@ -71,6 +72,7 @@ from icewall.materials.orthotropic import (
     strain_rotation,
 )
 from icewall.materials.ultimate_surface import strength_scale, strength_scale_gradient
+from icewall.materials.uniaxial import SECANT_FLOOR
 
 RELATIVE_STEP = 1e-6
 """Central-difference step on the principal strains, relative to the point's strain size (at
@@ -265,6 +267,28 @@ def _envelope_slopes(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.nd
     return by_eps, by_peak + by_peak_eps * _peak_strain_slope(strength, params)
 
 
+def _scaled_slopes(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.ndarray,
+                   here: np.ndarray, secant: np.ndarray, by_eps: np.ndarray,
+                   by_strength: np.ndarray, max_eps_u: np.ndarray, E: np.ndarray,
+                   sign_change: np.ndarray, params: Any, rows: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(secant, slope in |eps_iu|, slope in |sigma_ic|) of the envelope scaled through the
+    committed point (`fallen_strength: scaled`, concrete_formulas.scaled_envelope): s = c
+    sigma_env(eps), c = E_i max / sigma_env(max), both envelopes moving with sigma_ic."""
+    signed_max = np.copysign(max_eps_u, eps_u)
+    at_max, _ = _envelope(signed_max, strength, peak_strain, params, rows)
+    line = E * max_eps_u
+    _, scaled_secant = scaled_envelope(here, secant, at_max, line, sign_change, SECANT_FLOOR,
+                                       _point_column(params.E0, rows))
+    fallen = ~sign_change & (at_max > 0.0) & (line > at_max)
+    at_max_safe = np.where(fallen, at_max, 1.0)
+    scale = np.where(fallen, line / at_max_safe, 1.0)
+    _, by_strength_at_max = _envelope_slopes(signed_max, strength, peak_strain, params, rows)
+    by_strength = scale * (by_strength - np.where(fallen, here / at_max_safe, 0.0)
+                           * by_strength_at_max)
+    return scaled_secant, scale * by_eps, by_strength
+
+
 def principal_moduli(trial_state: ConcreteState, state: ConcreteState, params: Any,
                      formulation: str) -> np.ndarray:
     """d s_i / d e_j (n, 3, 3) at fixed axes of the corotational (or total) update whose trial
@@ -288,10 +312,15 @@ def principal_moduli(trial_state: ConcreteState, state: ConcreteState, params: A
                          sign_change[rows], params)  # their sigma_ic is a constant
         strength_slope = _strength_jacobian(trial[rows], strength, loading[rows] & ~kept,
                                             params)
-        _, secant = _envelope(eps_u[rows], strength, peak_strain, params, rows)
+        here, secant = _envelope(eps_u[rows], strength, peak_strain, params, rows)
+        by_eps, by_strength = _envelope_slopes(eps_u[rows], strength, peak_strain, params, rows)
+        if getattr(params, "fallen_strength", "envelope") == "scaled":
+            secant, by_eps, by_strength = _scaled_slopes(
+                eps_u[rows], strength, peak_strain, here, secant, by_eps, by_strength,
+                state.max_equivalent_uniaxial_strain[rows], E[rows], sign_change[rows],
+                params, rows)
         heal = ~sign_change[rows] & (secant > E[rows])  # loads along its secant: s = trial
         on_envelope = loading[rows] & ~heal
-        by_eps, by_strength = _envelope_slopes(eps_u[rows], strength, peak_strain, params, rows)
         loaded = ((by_eps / E[rows])[:, :, None] * np.eye(3)
                   + (np.sign(eps_u[rows]) * np.sign(strength) * by_strength)[:, :, None]
                   * strength_slope)

@@ -92,6 +92,10 @@ class ConcreteParameters:
     # sigma_ic, eps_ic of a direction past its peak: "ray" = read again on the trial stress's
     # ray at every update (errata 1.3, step 5); "peak" = kept from where it passed its peak
     post_peak_strength: str = "ray"
+    # a loading direction whose envelope on the ray lies below its secant line at max |eps_iu|:
+    # "envelope" = onto that envelope (Fig. 3.12 step 6; the stress jumps), "scaled" = the
+    # envelope scaled through the committed point (continuous; concrete_formulas.scaled_envelope)
+    fallen_strength: str = "envelope"
     # errata §1 corrections replaced by the printed form (deck printed_forms; PRINTED_FORMS)
     printed_forms: tuple[str, ...] = ()
     # descending branch in compression: "exponential" (eq. 3.11b) or "linear" (App. A)
@@ -117,6 +121,9 @@ class ConcreteParameters:
         if self.post_peak_strength not in ("ray", "peak"):
             raise ValueError("post_peak_strength must be 'ray' or 'peak', got "
                              f"{self.post_peak_strength!r}")
+        if self.fallen_strength not in ("envelope", "scaled"):
+            raise ValueError("fallen_strength must be 'envelope' or 'scaled', got "
+                             f"{self.fallen_strength!r}")
 
     @property
     def snap_back_tension(self) -> bool:
@@ -137,7 +144,8 @@ POINT_FORMS = ("eq3.2", "eq3.3d", "eq3.11a", "eq3.13", "fig3.12_step5")
 
 _DEFAULTS = ("E0", "ft", "eps_c", "eps_t", "nu0", "Gf", "alpha", "G_cr", "k_t", "k_c",
              "nu_max", "surface", "peak_strain_slope", "compression_tension_rule",
-             "mode_rule_band", "post_peak_strength", "printed_forms", "compression_branch")
+             "mode_rule_band", "post_peak_strength", "fallen_strength", "printed_forms",
+             "compression_branch")
 
 
 def printed_lower_limit_decay(k: ArrayLike, eps_peak: ArrayLike) -> np.ndarray:
@@ -218,6 +226,7 @@ def derive_concrete_parameters(fc: float, h_c: float, **overrides: object) -> Co
         peak_strain_slope=float(get("peak_strain_slope", 3.0)),
         compression_tension_rule=str(get("compression_tension_rule", "equal")),
         mode_rule_band=float(get("mode_rule_band", 0.0)),
-        post_peak_strength=str(get("post_peak_strength", "ray")), printed_forms=printed,
+        post_peak_strength=str(get("post_peak_strength", "ray")),
+        fallen_strength=str(get("fallen_strength", "envelope")), printed_forms=printed,
         compression_branch=str(get("compression_branch", "exponential")))
 

@@ -74,6 +74,7 @@ def concrete_parameters(c: Concrete, h_c: float) -> ConcreteParameters:
                                  "compression_tension_rule": c.compression_tension_rule,
                                  "mode_rule_band": c.mode_rule_band,
                                  "post_peak_strength": c.post_peak_strength,
+                                 "fallen_strength": c.fallen_strength,
                                  "nu_max": c.nu_max, "printed_forms": tuple(c.printed_forms),
                                  "compression_branch": c.compression_branch}
     for deck_key, key in (("E", "E0"), ("ft", "ft"), ("alpha", "alpha"), ("k_t", "k_t"),

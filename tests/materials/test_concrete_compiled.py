@@ -88,6 +88,10 @@ def _parameters(variant: str, n: int):
     if variant == "peak":  # and a direction past its peak keeping its strength
         return derive_concrete_parameters(53.5, 100.0, compression_tension_rule="floor",
                                           mode_rule_band=0.5, post_peak_strength="peak")
+    if variant == "scaled":  # and a fallen envelope scaled through the committed point
+        return derive_concrete_parameters(53.5, 100.0, compression_tension_rule="floor",
+                                          mode_rule_band=0.5, post_peak_strength="peak",
+                                          fallen_strength="scaled")
     return PARAMS
 
 
@@ -128,7 +132,8 @@ def _reference(strain, state, params, formulation, trial, frozen):
     return stress, new
 
 
-@pytest.mark.parametrize("variant", ["scalar", "per-point", "floor", "band", "peak"])
+@pytest.mark.parametrize("variant", ["scalar", "per-point", "floor", "band", "peak",
+                                     "scaled"])
 @pytest.mark.parametrize("trial", TRIALS)
 @pytest.mark.parametrize("formulation", FORMULATIONS)
 def test_update_equals_numpy_along_the_paths(formulation, trial, variant):

@@ -25,10 +25,10 @@ PATH = [[ET, -0.02 * EC, 0.0, 0.0], [3 * ET, -0.04 * EC, 0.0, 0.0], [6 * ET, -0.
         [5.5 * ET, -0.5 * EC, 0.0, 0.0]]
 
 
-def _committed(params, path=PATH) -> list[ConcreteState]:
+def _committed(params, path=PATH, formulation="plane_strain") -> list[ConcreteState]:
     states = [ConcreteState.initial(1, params)]
     for row in path:
-        states.append(update_concrete(np.array([row]), states[-1], params, "plane_strain",
+        states.append(update_concrete(np.array([row]), states[-1], params, formulation,
                                       "corotational")[2])
     return states[1:]
 
