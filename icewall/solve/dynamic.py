@@ -226,7 +226,9 @@ class _Drop:
     def at_rest(self) -> Increment | None:
         """The drop's end where the wall has come to rest: past the ramp, the kinetic energy
         below KINETIC_END of the energy put into motion, and the static unbalance of the state
-        within the load tolerance, or a static Newton step from it (the held quantity fixed,
+        within the load tolerance and its last correction within the displacement tolerance
+        (a time step accepted on its load norm alone, at its second iterate, may have moved
+        more), or a static Newton step from it (the held quantity fixed,
         at most CHECK_ITERATIONS) converging to the deck's tolerances. None (rolled back)
         otherwise."""
         e = self.energy
@@ -234,7 +236,8 @@ class _Drop:
                 or e.kinetic > KINETIC_END * (e.kinetic + e.damping)):
             return None
         static = static_load_norm(self.problem, self.current, self.start.load_scale)
-        if static <= self.settings.tolerance_load:  # at rest as it stands
+        if (static <= self.settings.tolerance_load  # at rest as it stands, on both norms
+                and self.current.displacement_norm <= self.settings.tolerance_displacement):
             return _ended(self.current, static, self.iterations, self.steps, self.time,
                           self.energy, self.start)
         self.next_check = self.steps + CHECK_EVERY
