@@ -24,8 +24,12 @@ RUN_FIELDS ?= [displacement, stress, strain, state]
 run: $(STAMP)  ## run the CF-4 deck (or DECK=...), storing the state fields the crack plots need
 	$(BIN)/icewall run $(DECK) --set 'outputs.fields=$(RUN_FIELDS)'
 
+# the default suite in two worker processes (CI has 2 cores), each test file on one worker so
+# that a file's shared runs (module fixtures) are made once; TEST_WORKERS=0 runs it in-process
+TEST_WORKERS ?= 2
+
 test: $(STAMP)  ## the default test suite (fast; no long validation runs)
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q -m "not slow" -n $(TEST_WORKERS) --dist loadfile
 
 test-platforms: $(STAMP)  ## the numerical test folders under every OpenBLAS kernel this CPU runs (by hand, before a numerical change lands; not part of `make test`)
 	$(BIN)/python tools/test_platforms.py

@@ -38,11 +38,14 @@ def probe(env: dict[str, str]) -> str | None:
     return done.stdout.strip() or "?" if done.returncode == 0 else None
 
 
-def run_pytest(env: dict[str, str], folders: list[str]) -> tuple[str, float]:
-    """(pytest's summary line, seconds) of the folders under `env`."""
+def run_pytest(env: dict[str, str], folders: list[str], workers: int = 0
+               ) -> tuple[str, float]:
+    """(pytest's summary line, seconds) of the folders under `env` (`workers` > 0: that many
+    pytest-xdist processes, each test file on one, as `make test` runs them)."""
     tic = time.perf_counter()
+    parallel = ["-n", str(workers), "--dist", "loadfile"] if workers > 0 else []
     done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-m", "not slow", "-p",
-                           "no:cacheprovider", *folders], env=env, cwd=ROOT,
+                           "no:cacheprovider", *parallel, *folders], env=env, cwd=ROOT,
                           capture_output=True, text=True, check=False)
     lines = [line for line in done.stdout.splitlines() if re.search(r"\d+ (passed|failed)",
                                                                      line)]
@@ -67,6 +70,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--kernels", default=",".join(KERNELS))
     parser.add_argument("--folders", default=",".join(NUMERICAL))
+    parser.add_argument("--workers", type=int, default=2,
+                        help="pytest-xdist processes per run (0: in-process)")
     args = parser.parse_args()
     folders = [f for f in args.folders.split(",") if f]
     base = {k: v for k, v in os.environ.items()
@@ -80,7 +85,7 @@ def main() -> int:
         if architecture is None:
             print(f"{label:32s} {'-':30s} not supported by this CPU (SIGILL)", flush=True)
             continue
-        summary, seconds = run_pytest(env, folders)
+        summary, seconds = run_pytest(env, folders, args.workers)
         failed |= "failed" in summary or "error" in summary or "exit" in summary
         print(f"{label:32s} {architecture:30s} {summary} ({seconds:.0f} s)", flush=True)
     return 1 if failed else 0
