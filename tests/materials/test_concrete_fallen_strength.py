@@ -13,7 +13,6 @@ from test_concrete_post_peak import RAY, _committed, _reload
 from test_concrete_tangent import random_damaged_points
 
 from icewall.materials.concrete import update_concrete
-from icewall.materials.concrete_tangent import consistent_tangent
 
 SCALED = dataclasses.replace(RAY, fallen_strength="scaled")
 DAMAGED = dataclasses.replace(RAY, post_peak_strength="peak", compression_tension_rule="floor",
@@ -76,23 +75,6 @@ def test_continuous_at_the_committed_strain_of_random_damaged_points(formulation
         jumps[reading] = int(np.sum(np.abs(above - below).max(axis=1) > 1e3 * h * scale))
     assert jumps["scaled"] == 0
     assert jumps["envelope"] >= n // 50
-
-
-@pytest.mark.parametrize("formulation", ["plane_strain", "plane_stress", "axisymmetric"])
-def test_tangent_and_zero_increment_of_the_scaled_law(formulation):
-    """The analytic tangent (with the scale's derivative through sigma_ic) equals the
-    differenced one, and a zero increment returns the committed stress."""
-    n = 400
-    params = dataclasses.replace(DAMAGED, fallen_strength="scaled")
-    state, strain = random_damaged_points(params, formulation, n, np.random.default_rng(3))
-    stress, _, trial = update_concrete(strain, state, params, formulation, "corotational")
-    again = update_concrete(trial.strain, trial, params, formulation, "corotational")[0]
-    np.testing.assert_allclose(again, stress, rtol=0.0, atol=1e-12 * np.abs(stress).max())
-    analytic = consistent_tangent(strain, state, params, formulation, method="analytic")
-    differenced = consistent_tangent(strain, state, params, formulation, method="differences")
-    error = (np.abs(analytic - differenced).max(axis=(1, 2))
-             / np.abs(differenced).max(axis=(1, 2)))
-    assert np.sum(error > 1e-6) <= 0.005 * n, np.sort(error)[-5:]
 
 
 def test_the_reading_is_checked_and_reaches_the_law():
