@@ -13,7 +13,7 @@ import pytest
 from reliability_support import CF4, DECKS, TF1, error_lines, invoke
 
 from icewall.deck.load import load_deck
-from icewall.deck.physical import RANGES
+from icewall.deck.physical import RANGES, outside
 
 ALLOW = ("--set", "analysis.allow_unphysical=true")
 
@@ -87,10 +87,13 @@ def test_the_shipped_decks_and_the_stability_variants_lie_inside(monkeypatch):
     monkeypatch.syspath_prepend(str(DECKS.parent / "tests" / "stability"))
     from stability_cases import HEAVY, QUICK
 
-    for deck in sorted(DECKS.glob("*.yaml")):
-        load_deck(deck)
-    for case in QUICK + HEAVY:
-        load_deck(DECKS / case.deck, list(case.overrides))
+    decks = sorted(DECKS.glob("*.yaml"))
+    assert len(decks) >= 18
+    loaded = [load_deck(deck).deck for deck in decks]
+    loaded += [load_deck(DECKS / case.deck, list(case.overrides)).deck for case in QUICK + HEAVY]
+    for deck in loaded:  # loaded with the ranges checked, and no value outside any of them
+        assert not deck.analysis.allow_unphysical
+        assert outside(deck) == []
 
 
 # -- every scheme refuses a singular system the same way ---------------------------------------
