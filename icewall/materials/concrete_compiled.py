@@ -129,7 +129,9 @@ def compiled_update(strain: np.ndarray, state: ConcreteState, params: Any, formu
     prm, k_t, k_c = parameter_tuple(params), _per_point(params.k_t, n), _per_point(params.k_c, n)
     mask = np.zeros(n, dtype=bool) if frozen is None else _kernel_array(frozen, bool)
     work, flags = np.empty((n, kernels.N_WORK, 3)), np.empty((n, kernels.N_FLAGS, 3), dtype=bool)
-    exponent, exponent_at_max = np.empty((n, 3)), np.zeros((n, 3))
+    exponent = np.empty((n, 3))
+    scaled = getattr(params, "fallen_strength", "envelope") == "scaled"
+    exponent_at_max = np.zeros((n, 3)) if scaled else exponent  # written only when scaled
     lode_x, lode_y = np.empty(n), np.empty(n)
     # NumPy's arctan2 and exp between the passes, as principal_strain_angle, lode_angle and
     # softening_stress call them (SIMD code where NumPy has it: no libm call matches it)
@@ -139,8 +141,9 @@ def compiled_update(strain: np.ndarray, state: ConcreteState, params: Any, formu
     kernels.ray_pass(S, prm, work, flags, np.exp(-exponent), lode_x, lode_y)
     kernels.strength_pass(S, prm, k_t, k_c, work, flags, np.arctan2(lode_y, lode_x), exponent,
                           exponent_at_max)
-    kernels.finish_pass(S, mask, frozen is not None, prm, work, flags, np.exp(-exponent),
-                        np.exp(-exponent_at_max), out)
+    decayed = np.exp(-exponent)
+    kernels.finish_pass(S, mask, frozen is not None, prm, work, flags, decayed,
+                        np.exp(-exponent_at_max) if scaled else decayed, out)
     return out[1], ConcreteState(*out)
 
 
