@@ -33,6 +33,13 @@ log = logging.getLogger(__name__)
 
 LINE_SEARCH_CUTS = 5
 """Halvings of the step length tried when a full Newton step raises the unbalance."""
+STALL_ITERATIONS = 8
+"""An increment whose worse norm (each over its tolerance) has not fallen below STALL_GAIN of
+its best for this many iterations has stalled: it fails at once, as at the iteration limit. A
+Newton iteration cycling among the branches of kinked laws (a softening point loading or
+unloading, an axis swap, a pair opening and closing) does not converge by going on; the path
+following cuts or bisects the step (docs/solver.md, item 38)."""
+STALL_GAIN = 0.9
 LINE_SEARCH_RISE = 4.0
 """While the pair states still change, a step is backtracked only when its unbalance exceeds
 this multiple of the current one (the active set walks the load; a decrease is not required);
@@ -128,6 +135,7 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
     previous_moduli = None
     forensics["chords"] = []
     limit = settings.max_iterations
+    stall = _Stall(settings)
     for iteration in range(1, limit + 1):
         log.debug("newton %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
                   "gap flips %d, Gauss-point flag changes %s, step length %s", iteration,
@@ -143,6 +151,11 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
             return Increment(kind, -float(current.u[problem.control_equation]),
                              current.load_factor, preload_factor, iteration - 1, disp_norm,
                              current.load_norm, current.evaluation, current.u, forensics)
+        if iteration > 1 and stall.stalled(iteration, disp_norm, current.load_norm):
+            raise StepFailed(f"stalled: no convergence in {iteration - 1} Newton iterations "
+                             f"(the norms have not fallen below {STALL_GAIN:g} of their best "
+                             f"for {STALL_ITERATIONS}; displacement norm {disp_norm:.3g}, load "
+                             f"norm {current.load_norm:.3g})", "non-convergence")
         tangent = problem.structure.with_tangent(current.evaluation)
         matrix_at = tangent
         if iteration == 1 and last_increment is not None and _norm(last_increment) > 0.0:
@@ -171,6 +184,21 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
     raise StepFailed(f"no convergence in {limit} Newton iterations "
                      f"(displacement norm {disp_norm:.3g}, load norm {current.load_norm:.3g})",
                      "non-convergence")
+
+
+class _Stall:
+    """The best of the worse of the two norms (each over its tolerance) so far, and when."""
+
+    def __init__(self, settings: SolverSettings) -> None:
+        self.tolerances = (settings.tolerance_displacement, settings.tolerance_load)
+        self.best, self.at = math.inf, 0
+
+    def stalled(self, iteration: int, disp_norm: float, load_norm: float) -> bool:
+        """Record an iterate's norms; True once STALL_ITERATIONS went by without a gain."""
+        merit = max(disp_norm / self.tolerances[0], load_norm / self.tolerances[1])
+        if merit < STALL_GAIN * self.best:
+            self.best, self.at = merit, iteration
+        return iteration - self.at >= STALL_ITERATIONS
 
 
 def _constraints_hold(problem: Problem, settings: SolverSettings, current: Iterate) -> bool:

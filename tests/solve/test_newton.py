@@ -342,3 +342,63 @@ def test_a_drop_sub_step_must_lower_the_unbalance_it_starts_from():
         assert substep_settings(loose, deck, static).tolerance_load == pytest.approx(expected)
     assert substep_settings(loose, deck, 3e-4).tolerance_displacement == (
         loose.tolerance_displacement)
+
+
+def _wrapped_direction(monkeypatch, change):
+    """Replace newton._newton_direction by `change(k, du, dP, dm)` of the true one (k: call
+    count from 0); return the list of calls."""
+    import icewall.solve.newton as newton_module
+
+    true_direction, calls = newton_module._newton_direction, []
+
+    def direction(*args, **kwargs):
+        du, dP, dm = true_direction(*args, **kwargs)
+        calls.append(1)
+        return change(len(calls) - 1, du, dP, dm)
+
+    monkeypatch.setattr(newton_module, "_newton_direction", direction)
+    return calls
+
+
+def test_a_cycling_newton_iteration_fails_once_its_norms_stall(monkeypatch):
+    """Iterates that go back and forth without their norms falling (a Newton iteration
+    cycling among the branches of kinked laws) fail after STALL_ITERATIONS, not at the deck's
+    iteration limit; the step is then cut as after any failure."""
+    from icewall.solve.control import StepFailed
+    from icewall.solve.controls import DisplacementControl
+    from icewall.solve.newton import STALL_ITERATIONS, newton_increment
+
+    problem, initial = newton_bar(100.0, 5, strength=1e9)
+    first = []
+
+    def back_and_forth(k, du, dP, dm):
+        first.append(du) if not first else None
+        return (1.0 if k % 2 == 0 else -1.0) * first[0], 0.0, 0.0 * dm
+
+    calls = _wrapped_direction(monkeypatch, back_and_forth)
+    control = DisplacementControl(problem.control_equation, 0.01)
+    with pytest.raises(StepFailed, match="stalled") as info:
+        newton_increment(problem, newton_settings(0.01, 0.01, iterations=40), initial,
+                         control, 0.0)
+    assert info.value.reason == "non-convergence"
+    assert len(calls) <= STALL_ITERATIONS + 2 < 40
+
+
+def test_the_stall_rule_cuts_plateaus_and_never_falling_norms():
+    """The rule on its own: norms that halve every iteration (linear convergence) never stall
+    over 60 iterations; a plateau stalls exactly STALL_ITERATIONS after its best iterate; a
+    gain smaller than STALL_GAIN over STALL_ITERATIONS does not count as one."""
+    from icewall.solve.newton import STALL_ITERATIONS, _Stall
+
+    tolerances = newton_settings(0.01, 0.01, tolerance=1e-4)
+    halving = _Stall(tolerances)
+    assert not any(halving.stalled(k, 0.5 ** k, 0.3 * 0.5 ** k) for k in range(2, 62))
+    plateau = _Stall(tolerances)
+    fired = [k for k in range(2, 40) if plateau.stalled(k, 1e-3 * 0.5 ** min(k, 4), 1e-5)]
+    assert fired[0] == 4 + STALL_ITERATIONS  # the best at iteration 4
+    # a rate r per iteration gains STALL_GAIN within STALL_ITERATIONS iff r ** STALL_ITERATIONS
+    # < STALL_GAIN: 0.98 goes on, 0.995 stalls
+    for rate, stalls in ((0.98, False), (0.995, True)):
+        creeping = _Stall(tolerances)
+        fired = [k for k in range(2, 200) if creeping.stalled(k, 1e-3 * rate ** k, 0.0)]
+        assert bool(fired) == stalls
