@@ -37,6 +37,7 @@ from icewall.solve.integrator import Dynamics, Motion, TimeStep, ramp
 from icewall.solve.newton import newton_increment, static_load_norm
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
+from icewall.solve.stability import stable_under_stroke
 
 log = logging.getLogger(__name__)
 
@@ -157,7 +158,7 @@ class _Drop:
         self.F_pre = (np.zeros_like(state.u) if problem.preload is None
                       else preload * problem.preload)
         self.mass, self.damping = c.restrict(dynamics.mass), c.restrict(dynamics.damping)
-        self.scheme, self.period = dynamics.scheme, dynamics.period
+        self.scheme, self.period, self.omega = dynamics.scheme, dynamics.period, dynamics.omega
         scale = dynamics.time_step_scale
         self.dt = scale * self.period / STEPS_PER_PERIOD
         self.tolerance = TIME_TOLERANCE * scale ** 3
@@ -237,7 +238,8 @@ class _Drop:
             return None
         static = static_load_norm(self.problem, self.current, self.start.load_scale)
         if (static <= self.settings.tolerance_load  # at rest as it stands, on both norms
-                and self.current.displacement_norm <= self.settings.tolerance_displacement):
+                and self.current.displacement_norm <= self.settings.tolerance_displacement
+                and self._stable(self.current)):
             return _ended(self.current, static, self.iterations, self.steps, self.time,
                           self.energy, self.start)
         self.next_check = self.steps + CHECK_EVERY
@@ -254,7 +256,7 @@ class _Drop:
         # the work of the forces the inertia held (the strain energy of the oscillation); the
         # drop has ended only where that is below KINETIC_END of the energy it moved
         removed = e.kinetic + self.energy.net_work(self.problem, self.current, inc, self.F_pre)
-        if abs(removed) > KINETIC_END * (e.kinetic + e.damping):
+        if abs(removed) > KINETIC_END * (e.kinetic + e.damping) or not self._stable(inc):
             c.rollback()
             return None
         c.commit()
@@ -262,6 +264,14 @@ class _Drop:
         static = static_load_norm(self.problem, inc, self.start.load_scale)
         return _ended(inc, static, self.iterations + inc.iterations, self.steps, self.time,
                       self.energy, self.start)
+
+    def _stable(self, end: Increment | PathState) -> bool:
+        """Whether the drop may end at `end`: an equilibrium stable with the stroke held (an
+        unstable one is where the motion passes through, or lingers before it leaves; where
+        the drop holds another quantity, any equilibrium)."""
+        weights = getattr(self.control, "weights", None)
+        return weights is None or stable_under_stroke(self.problem, end.evaluation, weights,
+                                                      self.omega)
 
     def _state(self) -> PathState:
         return _as_state(self.current, self.start)

@@ -47,6 +47,7 @@ from icewall.solve.integrator import Dynamics, GeneralizedAlpha, first_mode_freq
 from icewall.solve.newton import newton_increment
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
+from icewall.solve.stability import stable_under_stroke
 from icewall.solve.steps import StepSizeController
 
 log = logging.getLogger(__name__)
@@ -221,6 +222,14 @@ class _Mode:
         """Cut the step, bisect the bracket of a limit point, or switch to the next control;
         ConvergenceError when none is left. `current`, `load`: the last converged state."""
         reason = getattr(exc, "reason", "non-convergence")
+        if (self.name == "displacement" and reason == "unstable"
+                and self.size <= steps.smallest * (1 + 1e-9)):
+            # the smallest step from a stable state lands on an unstable one: the step is
+            # taken in time, and the motion finds the state the wall comes to rest in (a
+            # bisection would crawl: from nearer starts Newton lands on other equilibria)
+            self.ceiling = math.nan
+            self._switch("drop", where)
+            return
         if self.name == "displacement" and self.size <= steps.smallest * (1 + 1e-9):
             self.ceiling = current + self.size  # the failed deflection bounds the bracket
             if not self.located(current, load, settings):
@@ -335,6 +344,8 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             else:
                 inc = newton_increment(problem, settings, state, control, preload,
                                        last_increment=last_increment)
+                if mode.name == "displacement" and problem.mass is not None:
+                    _require_stable(problem, inc, path.R, mode.omega)
             if mode.name == "opening" and inc.control_displacement > settings.target * (
                     1 + 1e-12):
                 raise StepFailed("the opening step passed the target deflection", "overshoot")
@@ -347,8 +358,10 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         inc.wall_time = time.perf_counter() - tic
         d_deflection = inc.control_displacement - current
         d_load = inc.load_factor - state.load_factor
-        still = abs(d_deflection) <= STILL * max(settings.increment, 1e-30) and abs(
-            d_load) <= STILL * max(abs(state.load_factor), 1e-30)
+        # a step within a limit point's bracket is as small as the bracket: not stagnation
+        still = math.isnan(mode.ceiling) and abs(d_deflection) <= STILL * max(
+            settings.increment, 1e-30) and abs(d_load) <= STILL * max(abs(state.load_factor),
+                                                                     1e-30)
         stagnant = stagnant + 1 if still else 0
         mode.after_success(inc, d_deflection, d_load, steps, settings)
         last_increment = inc.u - state.u
@@ -374,6 +387,19 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             raise ConvergenceError(f"the path no longer moves at {where}: {stagnant} converged "
                                    "steps in a row changed neither the deflection nor the "
                                    "load", reason="stagnation")
+
+
+def _require_stable(problem: Problem, inc: Increment, reference: np.ndarray,
+                    omega: float) -> None:
+    """StepFailed ("unstable") where the converged step's equilibrium is unstable with the
+    stroke held (`stability.stable_under_stroke`): the test would not stay there. The step is
+    then cut like a failed one, and at the smallest step the bracket to the last stable state
+    is located and the drop taken from it (issue 36, item 3)."""
+    weights = StrokeControl.of_load(reference).weights
+    if not stable_under_stroke(problem, inc.evaluation, weights,
+                               0.0 if math.isnan(omega) else omega):
+        raise StepFailed("the equilibrium reached is unstable with the stroke held (the held "
+                         "tangent's determinant is not positive)", "unstable")
 
 
 def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,

@@ -1,0 +1,93 @@
+"""Whether a converged equilibrium is stable with the loading system's stroke held.
+
+A stroke-controlled test holds its stroke; the wall stays in an equilibrium only where that
+equilibrium is stable, and elsewhere it moves, with its own mass, to one that is. A static
+Newton iteration converges to unstable equilibria as readily as to stable ones (on CF-4 it
+climbs past its first maximum along states whose held tangent has a negative eigenvalue:
+docs/solver.md, item 38), so the path following asks this after every static step and takes
+the drop where the answer is no (`path._Mode`; issue 36's rule: a drop begins where "the held
+tangent loses positive definiteness").
+
+The test is the divergence criterion of M u'' + K_t u = 0 on the held subspace: K_t the
+consistent tangent of the converged state (each point on the branch its last increment took),
+restricted to the motions the supports, the held interface pairs (their active rows: closed
+normals, stuck tangents; a slipping pair's tangent is free) and the held stroke allow. Its
+determinant is positive in the elastic state; a negative one means an odd number of real
+eigenvalues have crossed zero, i.e. a mode along which the wall accelerates away (Bazant &
+Cedolin 1991, ch. 10; a pair crossing together or a flutter pair is not seen). The restriction
+is a penalty, K_t + a B^T B with B the held rows and a = PENALTY times the largest diagonal of
+K_t: for a large enough a, det has the sign of det(Z^T K_t Z) on the null space Z of B
+(Finsler's lemma; on CF-4 the smallest eigenvalues agree to three digits between a = 1e4 and
+1e7). The sign comes from one sparse LU: the signs of U's diagonal and the parities of the two
+permutations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import connected_components
+
+from icewall.interface.augmented import active_rows
+from icewall.solve.problem import Problem
+
+PENALTY = 1e4
+"""The penalty on the held rows, as a multiple of the largest diagonal of the tangent."""
+SLOWEST_GROWTH = 0.01
+"""Modes that grow slower than this fraction of the first mode's circular frequency omega_1
+do not count as an instability: det(K_t + (SLOWEST_GROWTH omega_1)^2 M) is tested, whose
+eigenvalues omega^2 + (SLOWEST_GROWTH omega_1)^2 are negative only for a mode that grows as
+exp(s t) with s above it (an e-folding time of 16 first periods). A mode growing slower
+creeps while the stroke moves on (with the damping, slower still); a drop waiting for it to
+leave a marginal state would not end."""
+
+
+def _parity(permutation: np.ndarray) -> int:
+    """+1 for an even permutation, -1 for an odd one: (-1) ** (n - its number of cycles), the
+    cycles being the connected components of the graph i -> permutation[i]."""
+    n = permutation.size
+    graph = sp.csr_matrix((np.ones(n), (np.arange(n), permutation)), shape=(n, n))
+    cycles = connected_components(graph, directed=True, connection="weak")[0]
+    return 1 if (n - cycles) % 2 == 0 else -1
+
+
+def determinant_sign(A: sp.spmatrix) -> int:
+    """The sign of det A (0 where the LU finds it exactly singular)."""
+    try:
+        lu = spla.splu(sp.csc_matrix(A), permc_spec="COLAMD")
+    except RuntimeError:  # exactly singular
+        return 0
+    diagonal = lu.U.diagonal()
+    if np.any(diagonal == 0.0):
+        return 0
+    negative = int(np.count_nonzero(diagonal < 0.0))
+    return (-1) ** negative * _parity(lu.perm_r) * _parity(lu.perm_c)
+
+
+def held_rows(problem: Problem, weights: np.ndarray) -> sp.csr_matrix:
+    """B: the stroke's row (`weights`, normalised) over the held interface pairs' rows."""
+    rows = [sp.csr_matrix(weights / max(float(np.linalg.norm(weights)), 1e-300))]
+    C = getattr(problem.constraints, "C", None)
+    if C is not None:
+        rows.append(sp.csr_matrix(C)[active_rows(problem.constraints.state)])
+    return sp.vstack(rows, format="csr")
+
+
+def stable_under_stroke(problem: Problem, evaluation, weights: np.ndarray,
+                        omega: float = 0.0) -> bool:
+    """Whether the equilibrium of `evaluation` (converged, at the constraints' current pair
+    states) is stable with the stroke `weights . u` held: det(K_t + a B^T B + (SLOWEST_GROWTH
+    omega)^2 M) > 0 on the free equations (`omega`: the first mode's circular frequency, rad/s;
+    0 or without masses: det(K_t + a B^T B))."""
+    s, c = problem.structure, problem.constraints
+    K = s.stiffness(s.with_tangent(evaluation)).tocsr()
+    scale = float(np.abs(K.diagonal()).max())
+    B = held_rows(problem, weights)
+    A = K + (PENALTY * scale) * (B.T @ B)
+    if problem.mass is not None and omega > 0.0:  # N/mm: (1/s^2) (t) = N/mm
+        A = A + sp.diags((SLOWEST_GROWTH * omega) ** 2 * problem.mass)
+    A = A.tocsr()
+    free = np.ones(A.shape[0], dtype=bool)
+    free[c.fixed] = False
+    return determinant_sign(A[free][:, free]) > 0
