@@ -33,7 +33,7 @@ import numpy as np
 
 from icewall.errors import ConvergenceError
 from icewall.solve.control import Increment, PathState, StepFailed
-from icewall.solve.integrator import Dynamics, Motion, TimeStep, ramp
+from icewall.solve.integrator import Dynamics, GeneralizedAlpha, Motion, TimeStep, ramp
 from icewall.solve.newton import newton_increment, static_load_norm
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
@@ -125,6 +125,12 @@ class DropEnergy:
                 np.sum(density * dV[cells]))
         if friction:
             self.friction += float(problem.constraints.friction_work_increment())
+
+
+def drop_dynamics(problem: Problem, settings: SolverSettings, omega: float) -> Dynamics:
+    """The drops' mass, damping and integrator (omega: the first mode's frequency, rad/s)."""
+    return Dynamics(problem.mass, omega, settings.damping_ratio,
+                    GeneralizedAlpha(settings.spectral_radius), settings.time_step_scale)
 
 
 def dynamic_drop(problem: Problem, settings: SolverSettings, state: PathState, control,

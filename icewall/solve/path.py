@@ -42,12 +42,12 @@ from icewall.solve.controls import (
     largest_principal,
 )
 from icewall.solve.drop import FIRST_INVERSE_STEP, drop_step
-from icewall.solve.dynamic import dynamic_drop
-from icewall.solve.integrator import Dynamics, GeneralizedAlpha, first_mode_frequency
+from icewall.solve.dynamic import drop_dynamics, dynamic_drop
+from icewall.solve.integrator import first_mode_frequency
 from icewall.solve.newton import newton_increment
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
-from icewall.solve.stability import stable_under_stroke
+from icewall.solve.stability import require_stable
 from icewall.solve.steps import StepSizeController
 
 log = logging.getLogger(__name__)
@@ -307,12 +307,6 @@ class _Mode:
                                    "drop": "a drop at a fixed deflection"}[name])
 
 
-def _dynamics(problem: Problem, settings: SolverSettings, omega: float) -> Dynamics:
-    """The drops' mass, damping and integrator."""
-    return Dynamics(problem.mass, omega, settings.damping_ratio,
-                    GeneralizedAlpha(settings.spectral_radius), settings.time_step_scale)
-
-
 def _advance_control(problem: Problem, settings: SolverSettings, state: PathState,
                      preload: float, resume: tuple) -> Iterator[tuple[Increment, PathState]]:
     """Displacement control to the target, the snap-back control through snap-backs, a drop
@@ -337,7 +331,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         try:
             if mode.name == "drop" and problem.mass is not None:
                 inc = dynamic_drop(problem, settings, state, control, preload,
-                                   _dynamics(problem, settings, mode.omega))
+                                   drop_dynamics(problem, settings, mode.omega))
             elif mode.name == "drop":
                 inc, mode.damping = drop_step(problem, settings, state, control, preload,
                                               mode.damping, last_increment)
@@ -345,7 +339,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                 inc = newton_increment(problem, settings, state, control, preload,
                                        last_increment=last_increment)
                 if mode.name == "displacement" and problem.mass is not None:
-                    _require_stable(problem, inc, path.R, mode.omega)
+                    require_stable(problem, inc, path.R, mode.omega)
             if mode.name == "opening" and inc.control_displacement > settings.target * (
                     1 + 1e-12):
                 raise StepFailed("the opening step passed the target deflection", "overshoot")
@@ -387,19 +381,6 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             raise ConvergenceError(f"the path no longer moves at {where}: {stagnant} converged "
                                    "steps in a row changed neither the deflection nor the "
                                    "load", reason="stagnation")
-
-
-def _require_stable(problem: Problem, inc: Increment, reference: np.ndarray,
-                    omega: float) -> None:
-    """StepFailed ("unstable") where the converged step's equilibrium is unstable with the
-    stroke held (`stability.stable_under_stroke`): the test would not stay there. The step is
-    then cut like a failed one, and at the smallest step the bracket to the last stable state
-    is located and the drop taken from it (issue 36, item 3)."""
-    weights = StrokeControl.of_load(reference).weights
-    if not stable_under_stroke(problem, inc.evaluation, weights,
-                               0.0 if math.isnan(omega) else omega):
-        raise StepFailed("the equilibrium reached is unstable with the stroke held (the held "
-                         "tangent's determinant is not positive)", "unstable")
 
 
 def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,

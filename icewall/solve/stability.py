@@ -24,12 +24,16 @@ permutations.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 
 from icewall.interface.augmented import active_rows
+from icewall.solve.control import Increment, StepFailed
+from icewall.solve.controls import StrokeControl
 from icewall.solve.problem import Problem
 
 PENALTY = 1e4
@@ -91,3 +95,17 @@ def stable_under_stroke(problem: Problem, evaluation, weights: np.ndarray,
     free = np.ones(A.shape[0], dtype=bool)
     free[c.fixed] = False
     return determinant_sign(A[free][:, free]) > 0
+
+
+def require_stable(problem: Problem, inc: Increment, reference: np.ndarray,
+                   omega: float) -> None:
+    """StepFailed ("unstable") where the converged step's equilibrium is unstable with the
+    stroke held (`stable_under_stroke`; `reference`: the jack loads, `omega`: omega_1 or NaN
+    before it is known): the test would not stay there. The step is then cut like a failed
+    one, and at the smallest step the drop is taken from the last stable state (issue 36,
+    item 3; `path._Mode.after_failure`)."""
+    weights = StrokeControl.of_load(reference).weights
+    if not stable_under_stroke(problem, inc.evaluation, weights,
+                               0.0 if math.isnan(omega) else omega):
+        raise StepFailed("the equilibrium reached is unstable with the stroke held (the held "
+                         "tangent's determinant is not positive)", "unstable")
