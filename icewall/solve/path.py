@@ -3,17 +3,15 @@ it to convergence, and yields it or cuts it. No fallback schemes and no frozen p
 that does not converge is cut, and the run stops with a reason when the smallest fails.
 
 The preload goes by load control. The control stage goes by displacement control while it
-converges. Where it cannot at the smallest step (a snap-back of the control deflection: a crack
-or a crushing zone releases more energy than the rest of the wall can take up at a fixed
-deflection, or the tangent is singular), the load drops at a fixed deflection, as it does in a
-stroke-controlled test: the step to the next deflection is taken through committed viscous
-sub-steps to a static equilibrium (`drop.drop_step`), accepted on the same tolerances and
-flagged `snap_back` (`analysis.on_snap_back: stop` stops the run there instead). With
-`analysis.trace_snap_backs` the snap-back is first traced under a control that grows through
-it - the opening of the concrete points at or near cracking (`controls.OpeningControl`; the
-energy released, `DissipationControl`, for other laws) - until the load and the deflection rise
-together again, and the drop is taken where that fails. The step size (deflection or opening)
-follows the iteration count (`steps.StepSizeController`).
+converges (with dynamic drops, to states stable with the stroke held: `stability`). Where it
+cannot at the smallest step (a snap-back: a crack or a crushing zone releases more energy than
+the rest of the wall can take up at a fixed deflection, or the tangent is singular), the load
+drops, as in a stroke-controlled test: through the wall's motion (`dynamic.dynamic_drop`) or
+committed viscous sub-steps (`drop.drop_step`) to a static equilibrium, accepted on the same
+tolerances and flagged `snap_back` (`analysis.on_snap_back: stop` stops there instead). With
+`analysis.trace_snap_backs` the snap-back is first traced under the opening of the points at
+or near cracking (`controls.OpeningControl`; the energy released for other laws) until load and
+deflection rise together again. The step size follows the iteration count (`steps`).
 """
 
 from __future__ import annotations
@@ -182,6 +180,7 @@ class _Mode:
     peak: float = 0.0  # the largest |load factor| so far: the scale of a separated structure
     halt: bool = False  # stop after the step just taken (on_snap_back: stop, separated)
     omega: float = math.nan  # the wall's first-mode frequency (rad/s): the drops' damping
+    kinked: float = 0.0  # 1.0 after a located bracket whose end converged (Newton's failure)
 
     def located(self, current: float, load: float, settings: SolverSettings) -> bool:
         """Whether the bracket [current, ceiling] pins the limit point's load to the
@@ -222,11 +221,12 @@ class _Mode:
         """Cut the step, bisect the bracket of a limit point, or switch to the next control;
         ConvergenceError when none is left. `current`, `load`: the last converged state."""
         reason = getattr(exc, "reason", "non-convergence")
-        if (self.name == "displacement" and reason == "unstable"
-                and self.size <= steps.smallest * (1 + 1e-9)):
-            # the smallest step from a stable state lands on an unstable one: the step is
-            # taken in time, and the motion finds the state the wall comes to rest in (a
-            # bisection would crawl: from nearer starts Newton lands on other equilibria)
+        if (self.name == "displacement" and self.size <= steps.smallest * (1 + 1e-9) and (
+                reason == "unstable" or (self.kinked and not math.isnan(self.omega)))):
+            # the smallest step lands on an unstable state, or fails again right after a
+            # bracket whose end converged (a kink the static iteration cannot settle): taken
+            # in time, the motion finds where the wall comes to rest (bisecting would crawl)
+            self.kinked = 0.0
             self.ceiling = math.nan
             self._switch("drop", where)
             return
@@ -290,10 +290,12 @@ class _Mode:
                 self.size = max(steps.smallest, min(steps.largest, d_deflection))
                 self.slope = d_load / d_deflection
         elif math.isnan(self.ceiling):
+            self.kinked = 0.0 if self.size > 2.0 * steps.smallest else self.kinked  # smooth
             self.size = steps.after_success(self.size, inc.iterations)
             self.slope = d_load / d_deflection if d_deflection > 0.0 else math.nan
         elif inc.control_displacement >= self.ceiling - LOCATED_WIDTH * settings.increment:
-            self.ceiling, self.size = math.nan, steps.smallest  # its end converged after all
+            # its end converged after all: Newton's failure, not a limit point
+            self.ceiling, self.size, self.kinked = math.nan, steps.smallest, 1.0
         elif self.located(inc.control_displacement, inc.load_factor, settings):
             self.size = self.ceiling - inc.control_displacement  # its end once more: the switch
         else:  # locating a limit point: bisect the bracket, never retry its failed end (the
@@ -319,7 +321,8 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
         mode = _Mode("opening" if resume[2] else "displacement", resume[0], resume[1],
                      resume[4] if len(resume) > 4 else FIRST_INVERSE_STEP,
                      *(resume[5:8] if len(resume) > 7 else ()),
-                     omega=resume[8] if len(resume) > 8 else math.nan)
+                     omega=resume[8] if len(resume) > 8 else math.nan,
+                     kinked=resume[9] if len(resume) > 9 else 0.0)
         stagnant = int(resume[3])
     path = _Path(problem, state, preload)
     last_increment = state.last_increment
@@ -365,7 +368,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                                                   float(mode.name == "opening"),
                                                   float(stagnant), mode.damping,
                                                   mode.ceiling, mode.slope, mode.peak,
-                                                  mode.omega))
+                                                  mode.omega, mode.kinked))
         state.last_increment = last_increment
         path.state = state
         yield inc, state
