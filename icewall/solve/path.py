@@ -68,12 +68,6 @@ LOCATED_WIDTH = 1e-12
 the slope (round-off of the deflection itself)."""
 
 
-def _controller(settings: SolverSettings, largest: float) -> StepSizeController:
-    return StepSizeController(largest=largest,
-                              smallest=largest / 2 ** settings.max_step_cuts,
-                              target_iterations=settings.target_iterations)
-
-
 class _Path:
     """What the control stage carries from step to step."""
 
@@ -128,7 +122,7 @@ class _Path:
 def _advance_preload(problem: Problem, settings: SolverSettings, state: PathState,
                      resume: tuple) -> Iterator[tuple[Increment, PathState]]:
     c = problem.constraints
-    steps = _controller(settings, 1.0 / settings.preload_increments)
+    steps = StepSizeController.of(settings, 1.0 / settings.preload_increments)
     current, size = (resume[0], resume[1]) if resume else (state.preload_factor, steps.largest)
     while current < 1.0 - 1e-12:
         goal = min(current + size, 1.0)
@@ -181,6 +175,7 @@ class _Mode:
     halt: bool = False  # stop after the step just taken (on_snap_back: stop, separated)
     omega: float = math.nan  # the wall's first-mode frequency (rad/s): the drops' damping
     kinked: float = 0.0  # 1.0 after a located bracket whose end converged (Newton's failure)
+    unstable: bool = False  # the last failure was an unstable state, not a Newton failure
 
     def located(self, current: float, load: float, settings: SolverSettings) -> bool:
         """Whether the bracket [current, ceiling] pins the limit point's load to the
@@ -221,15 +216,14 @@ class _Mode:
         """Cut the step, bisect the bracket of a limit point, or switch to the next control;
         ConvergenceError when none is left. `current`, `load`: the last converged state."""
         reason = getattr(exc, "reason", "non-convergence")
-        if (self.name == "displacement" and self.size <= steps.smallest * (1 + 1e-9) and (
-                reason == "unstable" or (self.kinked and not math.isnan(self.omega)))):
-            # the smallest step lands on an unstable state, or fails again right after a
-            # bracket whose end converged (a kink the static iteration cannot settle): taken
-            # in time, the motion finds where the wall comes to rest (bisecting would crawl)
-            self.kinked = 0.0
-            self.ceiling = math.nan
+        if (self.name == "displacement" and self.size <= steps.smallest * (1 + 1e-9)
+                and self.kinked and not math.isnan(self.omega)):
+            # a failure right after a bracket whose end converged (a kink Newton cannot
+            # settle): taken in time at once (bisecting again would crawl)
+            self.kinked, self.ceiling = 0.0, math.nan
             self._switch("drop", where)
             return
+        self.unstable = reason == "unstable"  # its bracket ends in a drop, never a retry
         if self.name == "displacement" and self.size <= steps.smallest * (1 + 1e-9):
             self.ceiling = current + self.size  # the failed deflection bounds the bracket
             if not self.located(current, load, settings):
@@ -297,7 +291,11 @@ class _Mode:
             # its end converged after all: Newton's failure, not a limit point
             self.ceiling, self.size, self.kinked = math.nan, steps.smallest, 1.0
         elif self.located(inc.control_displacement, inc.load_factor, settings):
-            self.size = self.ceiling - inc.control_displacement  # its end once more: the switch
+            if self.unstable:  # located where the stable path ends: the drop from here
+                self.ceiling = math.nan
+                self._switch("drop", "the located end of the stable path")
+            else:
+                self.size = self.ceiling - inc.control_displacement  # its end once more
         else:  # locating a limit point: bisect the bracket, never retry its failed end (the
             # slope stays the secant of the step before it: the bound, and not the noise of
             # a load change within the tolerance over a tiny step)
@@ -314,15 +312,16 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
     """Displacement control to the target, the snap-back control through snap-backs, a drop
     at a fixed deflection where neither converges."""
     c = problem.constraints
-    steps = _controller(settings, settings.increment)
+    steps = StepSizeController.of(settings, settings.increment)
     mode, stagnant = _Mode("displacement", steps.largest, 0.0), 0
-    if resume:  # (size, release, 1.0 under the snap-back control, stagnant steps, 1/dt of
-        # the drops, a limit point's bracket end and slope, the peak): below
+    if resume:  # (size, release, opening?, stagnant steps, 1/dt, bracket end, slope, peak,
+        # omega_1, kinked, unstable): below
         mode = _Mode("opening" if resume[2] else "displacement", resume[0], resume[1],
                      resume[4] if len(resume) > 4 else FIRST_INVERSE_STEP,
                      *(resume[5:8] if len(resume) > 7 else ()),
                      omega=resume[8] if len(resume) > 8 else math.nan,
-                     kinked=resume[9] if len(resume) > 9 else 0.0)
+                     kinked=resume[9] if len(resume) > 9 else 0.0,
+                     unstable=bool(resume[10]) if len(resume) > 10 else False)
         stagnant = int(resume[3])
     path = _Path(problem, state, preload)
     last_increment = state.last_increment
@@ -368,7 +367,8 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                                                   float(mode.name == "opening"),
                                                   float(stagnant), mode.damping,
                                                   mode.ceiling, mode.slope, mode.peak,
-                                                  mode.omega, mode.kinked))
+                                                  mode.omega, mode.kinked,
+                                                  float(mode.unstable)))
         state.last_increment = last_increment
         path.state = state
         yield inc, state

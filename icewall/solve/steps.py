@@ -21,6 +21,13 @@ class StepSizeController:
     smallest: float
     target_iterations: int = 6
 
+    @classmethod
+    def of(cls, settings, largest: float) -> StepSizeController:
+        """The controller of a stage whose largest step is `largest`: `settings.max_step_cuts`
+        halvings below it, aimed at `settings.target_iterations` (a SolverSettings)."""
+        return cls(largest=largest, smallest=largest / 2 ** settings.max_step_cuts,
+                   target_iterations=settings.target_iterations)
+
     def after_success(self, size: float, iterations: int) -> float:
         ratio = math.sqrt(self.target_iterations / max(iterations, 1))
         return min(self.largest, max(self.smallest, size * min(2.0, max(0.5, ratio))))

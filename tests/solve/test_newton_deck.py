@@ -53,7 +53,12 @@ def test_newton_traces_cf4_through_its_peak_with_every_step_converged(tmp_path):
     item 35) as measured then (5.007841, 5.768175 and 6.187135 MPa at 5, 6 and 6.7 mm, the
     same to the printed digits over two round-off realizations, the Haswell, Sandybridge and
     Prescott kernels, the NumPy/numba concrete kernels and two predictor probes), within
-    0.1 %. Past that limit point the branch the static iteration follows depends on its own
+    0.2 %: since the stall rule (item 38) a Newton try stops where its norms stop falling,
+    which the kernel's round-off can move by an iteration, the step sequence follows, and the
+    incremental law moves the curve with it (measured: 5.01266 / 5.76538 / 6.18421 under
+    Haswell and the NumPy kernel, 5.01035 / 5.76107 / 6.18246 under Sandybridge, 5.01274 /
+    5.76401 / 6.18626 under Prescott; at most 0.13 % from the old figures). Past that limit
+    point the branch the static iteration follows depends on its own
     decisions (6.25 or 6.31 MPa at 6.9-7.0 mm after a snap of up to 0.8 % of the load, item
     35; the dynamic drops of issue 36 decide it by inertia): only the range of the peak is
     asserted there."""
@@ -74,7 +79,7 @@ def test_newton_traces_cf4_through_its_peak_with_every_step_converged(tmp_path):
         deflection, load = stroke_curve(np.asarray(h["control_displacement"]),
                                         np.asarray(h["load"]))
     measured = np.interp([5.0, 6.0, 6.7], deflection, load)
-    assert measured == pytest.approx([5.007841, 5.768175, 6.187135], rel=1e-3)
+    assert measured == pytest.approx([5.007841, 5.768175, 6.187135], rel=2e-3)
     peak = int(np.argmax(load))
     assert measured[-1] <= load[peak] <= 1.03 * measured[-1]
     assert 6.7 <= deflection[peak] <= 7.2
