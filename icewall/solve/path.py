@@ -174,7 +174,7 @@ class _Mode:
     peak: float = 0.0  # the largest |load factor| so far: the scale of a separated structure
     halt: bool = False  # stop after the step just taken (on_snap_back: stop, separated)
     omega: float = math.nan  # the wall's first-mode frequency (rad/s): the drops' damping
-    kinked: float = 0.0  # 1.0 after a located bracket whose end converged (Newton's failure)
+    kinked: bool = False  # after a located bracket whose end converged (Newton's failure)
     unstable: bool = False  # the last failure was an unstable state, not a Newton failure
 
     def located(self, current: float, load: float, settings: SolverSettings) -> bool:
@@ -220,7 +220,7 @@ class _Mode:
                 and self.kinked and not math.isnan(self.omega)):
             # a failure right after a bracket whose end converged (a kink Newton cannot
             # settle): taken in time at once (bisecting again would crawl)
-            self.kinked, self.ceiling = 0.0, math.nan
+            self.kinked, self.ceiling = False, math.nan
             self._switch("drop", where)
             return
         self.unstable = reason == "unstable"  # its bracket ends in a drop, never a retry
@@ -284,12 +284,12 @@ class _Mode:
                 self.size = max(steps.smallest, min(steps.largest, d_deflection))
                 self.slope = d_load / d_deflection
         elif math.isnan(self.ceiling):
-            self.kinked = 0.0 if self.size > 2.0 * steps.smallest else self.kinked  # smooth
+            self.kinked = self.kinked and self.size <= 2.0 * steps.smallest  # smooth again?
             self.size = steps.after_success(self.size, inc.iterations)
             self.slope = d_load / d_deflection if d_deflection > 0.0 else math.nan
         elif inc.control_displacement >= self.ceiling - LOCATED_WIDTH * settings.increment:
             # its end converged after all: Newton's failure, not a limit point
-            self.ceiling, self.size, self.kinked = math.nan, steps.smallest, 1.0
+            self.ceiling, self.size, self.kinked = math.nan, steps.smallest, True
         elif self.located(inc.control_displacement, inc.load_factor, settings):
             if self.unstable:  # located where the stable path ends: the drop from here
                 self.ceiling = math.nan
@@ -320,7 +320,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                      resume[4] if len(resume) > 4 else FIRST_INVERSE_STEP,
                      *(resume[5:8] if len(resume) > 7 else ()),
                      omega=resume[8] if len(resume) > 8 else math.nan,
-                     kinked=resume[9] if len(resume) > 9 else 0.0,
+                     kinked=bool(resume[9]) if len(resume) > 9 else False,
                      unstable=bool(resume[10]) if len(resume) > 10 else False)
         stagnant = int(resume[3])
     path = _Path(problem, state, preload)
@@ -367,7 +367,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                                                   float(mode.name == "opening"),
                                                   float(stagnant), mode.damping,
                                                   mode.ceiling, mode.slope, mode.peak,
-                                                  mode.omega, mode.kinked,
+                                                  mode.omega, float(mode.kinked),
                                                   float(mode.unstable)))
         state.last_increment = last_increment
         path.state = state

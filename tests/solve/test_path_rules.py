@@ -38,11 +38,11 @@ def test_after_a_bracket_whose_end_converged_the_next_failure_is_taken_in_time()
     mode.after_failure(_failed("non-convergence"), "here", STEPS, SETTINGS, 7.0, 7e5)
     end = mode.ceiling
     mode.after_success(_converged(end, 7e5), end - 7.0, 0.0, STEPS, SETTINGS)  # its end
-    assert mode.kinked == 1.0 and math.isnan(mode.ceiling) and mode.size == STEPS.smallest
+    assert mode.kinked and math.isnan(mode.ceiling) and mode.size == STEPS.smallest
     mode.after_failure(_failed("non-convergence"), "there", STEPS, SETTINGS, end, 7e5)
-    assert mode.name == "drop" and mode.kinked == 0.0
+    assert mode.name == "drop" and not mode.kinked
     # without masses (viscous drops) the bracket is located as before
-    static = _Mode("displacement", STEPS.smallest, 0.0, slope=1e5, kinked=1.0)
+    static = _Mode("displacement", STEPS.smallest, 0.0, slope=1e5, kinked=True)
     static.after_failure(_failed("non-convergence"), "there", STEPS, SETTINGS, end, 7e5)
     assert static.name == "displacement" and not math.isnan(static.ceiling)
 
@@ -51,9 +51,9 @@ def test_a_smooth_step_clears_the_kink_and_an_unstable_bracket_ends_in_a_drop():
     # an unstable smallest step is bracketed like a failed one (the peak stays a property of
     # the path, issue 35), but once located the drop is taken from there: its end is never
     # tried again (from nearer starts Newton lands on other equilibria, and retrying crawls)
-    mode = _Mode("displacement", 4 * STEPS.smallest, 0.0, slope=1e5, omega=250.0, kinked=1.0)
+    mode = _Mode("displacement", 4 * STEPS.smallest, 0.0, slope=1e5, omega=250.0, kinked=True)
     mode.after_success(_converged(7.1, 7.1e5, 5), 4 * STEPS.smallest, 1e3, STEPS, SETTINGS)
-    assert mode.kinked == 0.0
+    assert not mode.kinked
     mode.after_failure(_failed("unstable"), "here", STEPS, SETTINGS, 7.1, 7.1e5)
     assert mode.name == "displacement" and mode.size < 4 * STEPS.smallest  # cut first
     mode.size = STEPS.smallest
