@@ -14,13 +14,22 @@ M is the HRZ-lumped mass (`fem.mass`) of the deck's densities (plus a loading he
 mass-proportional Rayleigh damping 2 xi omega_1 M at the wall's first mode (omega_1 from the
 Rayleigh quotient of the static response to the jack loads at the run's first step). The time
 step follows a local error estimate (Zienkiewicz & Xie 1991: (beta - 1/6) dt^2 (a1 - a0) against
-the drop's motion) and the iteration count; `analysis.time_step_scale` scales every one. The
-drop ends where the kinetic energy is below KINETIC_END of the energy the drop put into motion
-and damping, and the static unbalance (inertia and damping forces taken out) meets the deck's
-load tolerance, or a static Newton step from there does and removes less than that: an
-equilibrium of the model at the held stroke, accepted on the same norms as every step. Its
-work terms are summed over the time steps (`DropEnergy`), so the energy balance of the run
-(external = stored + dissipated + damped + kinetic) stays closed through it.
+the drop's motion) and the iteration count, below a twentieth of the first period, and below
+half the e-folding time of the fastest unstable mode where a static step from the motion finds
+an unstable equilibrium (`stability.fastest_growth`: a longer implicit step holds the wall on
+it); `analysis.time_step_scale` scales every one.
+
+The drop ends where the motion no longer changes the equilibrium it settles about: every half
+period (CHECK_PERIODS) a static Newton step from the moving state seeks the equilibrium at the
+held stroke; where it is stable and agrees with the last one found (the load factor within
+the deck's load tolerance, the displacements within its displacement tolerance of the drop's
+motion) or takes out less than KINETIC_END of what the drop moved, the drop ends there. What
+the vibration still held (its kinetic energy and the work of the forces the inertia held) is
+what the damping would have taken, booked as the kinetic energy left. A state whose static
+unbalance meets the tolerances as it stands, with the kinetic energy below KINETIC_END of what
+the drop moved, ends it at once. Its work terms are summed over the time steps
+(`DropEnergy`), so the energy balance of the run (external = stored + dissipated + damped +
+kinetic) stays closed through it.
 """
 
 from __future__ import annotations
@@ -37,14 +46,26 @@ from icewall.solve.integrator import Dynamics, GeneralizedAlpha, Motion, TimeSte
 from icewall.solve.newton import newton_increment, static_load_norm
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
-from icewall.solve.stability import stable_under_stroke
+from icewall.solve.stability import fastest_growth, stable_under_stroke
 
 log = logging.getLogger(__name__)
 
 STEPS_PER_PERIOD = 40
-"""The first time step of a drop: this fraction of the first period (the largest step stays
-free: as the motion dies out the error estimate lets it grow, and the integrator's high-
-frequency dissipation takes the wall to rest)."""
+"""The first time step of a drop: this fraction of the first period."""
+LARGEST_STEP = 1.0 / 20.0
+"""The largest time step, as a fraction of the first period (times time_step_scale): the first
+mode stays resolved, and so does a mode that grows at its rate. (An implicit step much longer
+than a growing mode's e-folding time damps its growth: a drop whose steps grew without bound
+stood still on the unstable equilibrium it was to leave, CF-4 at 10.93 mm.)"""
+RESOLVED_GROWTH = 0.5
+"""Where the equilibrium a static step from the motion reaches is unstable, the time step is at
+most this over the growth rate of its fastest unstable mode (`stability.fastest_growth`):
+an implicit step longer than the growth's e-folding time holds the wall on the unstable
+state (CF-4 at 10.93 mm: a local mode growing at 99 omega_1 under steps of 1/20 of the
+period, 40 periods at rest; under steps of 1/1240 it left in 0.7 of a period). The bound is
+lifted once the moving state's tangent is stable again (tested every CHECK_EVERY steps)."""
+CHECK_EVERY = 10
+"""Time steps between two tests of that, while the bound holds (one sparse LU each)."""
 TIME_TOLERANCE = 1e-2
 """Local error of a time step, (beta - 1/6) dt^2 |a1 - a0|, against the displacement the drop
 has made so far (times time_step_scale^3: the steps scale with it)."""
@@ -55,11 +76,12 @@ STEP_ITERATIONS = 12
 is retried with half the time step: a shorter step crosses fewer kinks of the laws, and a
 failed try costs less than the static limit."""
 KINETIC_END = 1e-2
-"""The drop ends once the kinetic energy is below this fraction of the energy it put into
-motion (kinetic + damped so far) and a static Newton step from there meets the deck's
-tolerances: the equilibrium the motion has settled about."""
-CHECK_EVERY = 5
-"""Time steps between two tries of that static step."""
+"""A state whose static unbalance meets the tolerances as it stands ends the drop where the
+kinetic energy is below this fraction of the energy the drop put into motion (kinetic +
+damped so far): not where a vibration passes its mean with the energy in its velocity."""
+CHECK_PERIODS = 0.5
+"""First periods between two tries of the static step that may end the drop: the motion swings
+from one side of its mean to the other between them."""
 CHECK_ITERATIONS = 10
 """Newton iterations of that static step: it starts next to an equilibrium or not at all."""
 MAX_TIME_STEPS = 5000
@@ -166,7 +188,8 @@ class _Drop:
         self.mass, self.damping = c.restrict(dynamics.mass), c.restrict(dynamics.damping)
         self.scheme, self.period, self.omega = dynamics.scheme, dynamics.period, dynamics.omega
         scale = dynamics.time_step_scale
-        self.dt = scale * self.period / STEPS_PER_PERIOD
+        self.dt, self.scale = scale * self.period / STEPS_PER_PERIOD, scale
+        self.free_largest = self.largest = scale * self.period * LARGEST_STEP
         self.tolerance = TIME_TOLERANCE * scale ** 3
         zero = np.zeros_like(state.u)
         self.motion, self.r0 = Motion(state.u, zero, zero), zero
@@ -182,7 +205,8 @@ class _Drop:
             self.start = state
         self.current: Increment | PathState = state
         self.energy, self.iterations, self.steps, self.time = DropEnergy(), 0, 0, 0.0
-        self.next_check = 0
+        self.next_check = self.ramp_time
+        self.settled: Increment | None = None  # the last check's equilibrium (rolled back)
 
     def held(self, time: float):
         """The held quantity's control at `time` (the ramp from where the drop began)."""
@@ -219,7 +243,10 @@ class _Drop:
         growth = min(2.0, max(0.5, 0.9 * max(ratio, 1e-12) ** (-1.0 / 3.0)))
         if inc.iterations > TARGET_ITERATIONS:
             growth = min(growth, math.sqrt(TARGET_ITERATIONS / inc.iterations))
-        self.dt *= growth
+        self.dt = min(self.largest, self.dt * growth)
+        if self.largest < self.free_largest and self.steps % CHECK_EVERY == 0 and self._stable(
+                inc):
+            self.largest = self.free_largest  # the unstable mode has gone
         return True
 
     def _shorter(self, factor: float, exc: Exception) -> None:
@@ -231,24 +258,26 @@ class _Drop:
                              getattr(exc, "reason", "non-convergence")) from None
 
     def at_rest(self) -> Increment | None:
-        """The drop's end where the wall has come to rest: past the ramp, the kinetic energy
-        below KINETIC_END of the energy put into motion, and the static unbalance of the state
-        within the load tolerance and its last correction within the displacement tolerance
-        (a time step accepted on its load norm alone, at its second iterate, may have moved
-        more), or a static Newton step from it (the held quantity fixed,
-        at most CHECK_ITERATIONS) converging to the deck's tolerances. None (rolled back)
+        """The drop's end where the wall has come to rest, past the ramp: the kinetic energy
+        below KINETIC_END, the static unbalance of the state within the load tolerance and its
+        last correction within the displacement tolerance; or, every CHECK_PERIODS, a static
+        Newton step from it (the held quantity fixed, at most CHECK_ITERATIONS) to a stable
+        equilibrium that the last one reached too or that removes less than KINETIC_END (an
+        unstable one bounds the time steps: `_resolve_growth`). None (rolled back)
         otherwise."""
-        e = self.energy
-        if (self.time < self.ramp_time or self.steps < self.next_check
-                or e.kinetic > KINETIC_END * (e.kinetic + e.damping)):
+        if self.time < self.ramp_time:
             return None
-        static = static_load_norm(self.problem, self.current, self.start.load_scale)
-        if (static <= self.settings.tolerance_load  # at rest as it stands, on both norms
-                and self.current.displacement_norm <= self.settings.tolerance_displacement
-                and self._stable(self.current)):
-            return _ended(self.current, static, self.iterations, self.steps, self.time,
-                          self.energy, self.start)
-        self.next_check = self.steps + CHECK_EVERY
+        e = self.energy
+        if e.kinetic <= KINETIC_END * (e.kinetic + e.damping):
+            static = static_load_norm(self.problem, self.current, self.start.load_scale)
+            if (static <= self.settings.tolerance_load  # at rest as it stands, both norms
+                    and self.current.displacement_norm <= self.settings.tolerance_displacement
+                    and self._stable(self.current)):
+                return _ended(self.current, static, self.iterations, self.steps, self.time,
+                              self.energy, self.start)
+        if self.time < self.next_check:
+            return None
+        self.next_check = self.time + CHECK_PERIODS * self.period
         check = replace(self.static_settings, max_iterations=min(
             self.static_settings.max_iterations, CHECK_ITERATIONS))
         c = self.problem.constraints
@@ -256,13 +285,20 @@ class _Drop:
             inc = newton_increment(self.problem, check, self._state(), self.held(self.time),
                                    self.preload)
         except (StepFailed, ConvergenceError):
+            inc = None
+        if inc is None:
             c.rollback()
             return None
         # the static step takes the vibration left out of the account: its kinetic energy and
-        # the work of the forces the inertia held (the strain energy of the oscillation); the
-        # drop has ended only where that is below KINETIC_END of the energy it moved
-        removed = e.kinetic + self.energy.net_work(self.problem, self.current, inc, self.F_pre)
-        if abs(removed) > KINETIC_END * (e.kinetic + e.damping) or not self._stable(inc):
+        # the work of the forces the inertia held (the strain energy of the oscillation)
+        removed = e.kinetic + e.net_work(self.problem, self.current, inc, self.F_pre)
+        settled, self.settled = self.settled, inc
+        if not self._stable(inc):
+            self._resolve_growth(inc)  # at the check's pair states
+            c.rollback()
+            return None
+        if not (abs(removed) <= KINETIC_END * (e.kinetic + e.damping)
+                or self._agrees(settled, inc)):
             c.rollback()
             return None
         c.commit()
@@ -270,6 +306,30 @@ class _Drop:
         static = static_load_norm(self.problem, inc, self.start.load_scale)
         return _ended(inc, static, self.iterations + inc.iterations, self.steps, self.time,
                       self.energy, self.start)
+
+    def _resolve_growth(self, unstable: Increment) -> None:
+        """Bound the time step by RESOLVED_GROWTH over the fastest growth rate at `unstable`."""
+        fastest = 1.0 / (SMALLEST_STEP * self.period)
+        rate = fastest_growth(self.problem, unstable.evaluation, self.control.weights,
+                              self.omega, fastest)
+        if rate > 0.0:
+            self.largest = min(self.free_largest, self.scale * RESOLVED_GROWTH / rate)
+            self.dt = min(self.dt, self.largest)
+            log.debug("dynamic drop: unstable equilibrium at t = %.4g s, growth %.3g omega_1: "
+                      "time steps below %.3g s", self.time, rate / self.omega, self.largest)
+
+    def _agrees(self, before: Increment | None, after: Increment) -> bool:
+        """Whether two static equilibria reached from the motion are the same: the load
+        factors within the load tolerance of the load, the displacements within the
+        displacement tolerance of the drop's motion."""
+        if before is None:
+            return False
+        s = self.settings
+        load = abs(after.load_factor - before.load_factor) <= s.tolerance_load * max(
+            abs(after.load_factor), 1e-300)
+        motion = float(np.linalg.norm(after.u - self.start.u))
+        return load and float(np.linalg.norm(after.u - before.u)) <= (
+            s.tolerance_displacement * motion)
 
     def _stable(self, end: Increment | PathState) -> bool:
         """Whether the drop may end at `end`: an equilibrium stable with the stroke held (an

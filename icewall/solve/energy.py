@@ -18,7 +18,7 @@ class EnergyAccount:
     friction_work: float = 0.0
     elastic_energy: dict[str, float] = field(default_factory=dict)
     damping_work: float = 0.0  # viscous damping of the dynamic drops
-    kinetic_lost: float = 0.0  # kinetic energy left where a drop ended (at rest within KINETIC_END)
+    kinetic_lost: float = 0.0  # what the vibration held where a drop ended (solve.dynamic)
     dynamic: bool = False  # the run can take dynamic drops: record their columns
 
     def add_drop(self, drop) -> None:

@@ -78,23 +78,50 @@ def held_rows(problem: Problem, weights: np.ndarray) -> sp.csr_matrix:
     return sp.vstack(rows, format="csr")
 
 
+def held_tangent(problem: Problem, evaluation, weights: np.ndarray
+                 ) -> tuple[sp.csr_matrix, np.ndarray | None]:
+    """K_t + a B^T B on the free equations, and the lumped masses there (None without)."""
+    s, c = problem.structure, problem.constraints
+    K = s.stiffness(s.with_tangent(evaluation)).tocsr()
+    scale = float(np.abs(K.diagonal()).max())
+    B = held_rows(problem, weights)
+    A = (K + (PENALTY * scale) * (B.T @ B)).tocsr()
+    free = np.ones(A.shape[0], dtype=bool)
+    free[c.fixed] = False
+    mass = None if problem.mass is None else problem.mass[free]
+    return A[free][:, free], mass
+
+
 def stable_under_stroke(problem: Problem, evaluation, weights: np.ndarray,
                         omega: float = 0.0) -> bool:
     """Whether the equilibrium of `evaluation` (converged, at the constraints' current pair
     states) is stable with the stroke `weights . u` held: det(K_t + a B^T B + (SLOWEST_GROWTH
     omega)^2 M) > 0 on the free equations (`omega`: the first mode's circular frequency, rad/s;
     0 or without masses: det(K_t + a B^T B))."""
-    s, c = problem.structure, problem.constraints
-    K = s.stiffness(s.with_tangent(evaluation)).tocsr()
-    scale = float(np.abs(K.diagonal()).max())
-    B = held_rows(problem, weights)
-    A = K + (PENALTY * scale) * (B.T @ B)
-    if problem.mass is not None and omega > 0.0:  # N/mm: (1/s^2) (t) = N/mm
-        A = A + sp.diags((SLOWEST_GROWTH * omega) ** 2 * problem.mass)
-    A = A.tocsr()
-    free = np.ones(A.shape[0], dtype=bool)
-    free[c.fixed] = False
-    return determinant_sign(A[free][:, free]) > 0
+    A, mass = held_tangent(problem, evaluation, weights)
+    if mass is not None and omega > 0.0:  # N/mm: (1/s^2) (t) = N/mm
+        A = A + sp.diags((SLOWEST_GROWTH * omega) ** 2 * mass)
+    return determinant_sign(A) > 0
+
+
+def fastest_growth(problem: Problem, evaluation, weights: np.ndarray, omega: float,
+                   fastest: float) -> float:
+    """The growth rate s (1/s) of the fastest unstable mode of M u'' + K_t u = 0 with the
+    stroke held, to a factor 2 from above: the signs of det(K_t + a B^T B + sigma M) on
+    sigma = (SLOWEST_GROWTH omega)^2 4^k, the largest sigma below which the sign changes (an
+    odd number of eigenvalues -s^2 in between). 0 where the state is stable; `fastest` where
+    the sign is still negative there (a growth no time step above 1 / fastest resolves)."""
+    A, mass = held_tangent(problem, evaluation, weights)
+    M = sp.diags(mass)
+    rate, top = SLOWEST_GROWTH * omega, 0.0
+    sign = determinant_sign(A + rate ** 2 * M)
+    while rate < fastest:
+        rate *= 2.0
+        next_sign = determinant_sign(A + rate ** 2 * M)
+        if next_sign != sign:
+            top = rate
+        sign = next_sign
+    return fastest if sign <= 0 else top
 
 
 def require_stable(problem: Problem, inc: Increment, reference: np.ndarray,

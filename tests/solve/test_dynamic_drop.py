@@ -15,9 +15,11 @@ import pytest
 from softening_bar import SofteningLaw, SofteningParams
 from test_newton import newton_bar, newton_settings
 
+import icewall.solve.dynamic as dynamic
 from icewall.fem.mass import lumped_mass_vector
 from icewall.model.materials import MaterialGroup
 from icewall.model.structure import Structure
+from icewall.solve.controls import DisplacementControl
 from icewall.solve.path import follow_path
 
 LENGTH, H, E, F, EPS_F, AREA = 1000.0, 100.0, 30000.0, 0.9 * 3.0, 0.0003, 10.0
@@ -104,7 +106,9 @@ def test_the_bar_snaps_and_comes_to_rest_on_an_equilibrium_of_its_law():
     sigma_r = RESIDUAL * F
     assert after <= sigma_r * AREA * (1 + 1e-9) and after > 0.5 * sigma_r * AREA
     assert np.all(np.diff(d) > 0) and d[-1] == pytest.approx(0.15)  # the stroke never turns
-    assert np.all(np.diff(P[peak + 1:]) >= -1e-9 * F * AREA)  # reloading, then the plateau
+    # reloading, then the plateau (its drops end on equilibria within the load tolerance,
+    # 1e-9 of the peak: 1.2e-9 below it measured)
+    assert np.all(np.diff(P[peak + 1:]) >= -1e-8 * F * AREA)
     assert P[-1] == pytest.approx(sigma_r * AREA, rel=1e-6)
     settings = newton_settings(0.15, 0.02, cuts=3, trace=False)
     # the drop's end is a converged equilibrium by the schemes' own test (and the summary's):
@@ -126,8 +130,7 @@ def test_the_bar_snaps_and_comes_to_rest_on_an_equilibrium_of_its_law():
 def test_the_energy_account_of_a_drop_closes(rho_inf, closure):
     # without algorithmic dissipation (rho_inf = 1, the trapezoidal rule) external work =
     # internal work + damping + the kinetic energy left, to round-off; at the default 0.5 the
-    # integrator takes 3.9 % of what the drop moved out of its high modes (0.8 % at half the
-    # time step)
+    # integrator takes 1.0 % of what the first drop moved out of its high modes (measured)
     problem, steps = _run(residual=True, spectral_radius=rho_inf)
     drops = [inc for inc, _ in steps if inc.path_energy is not None]
     assert drops
@@ -141,8 +144,8 @@ def test_the_energy_account_of_a_drop_closes(rho_inf, closure):
 
 
 def test_where_the_bar_comes_to_rest_converges_with_the_time_step_and_dissipation():
-    # the load it comes to rest at, measured: 5.6962 (time_step_scale 1), 5.6547 (0.5),
-    # 5.6419 (0.25); 5.7087 / 5.7016 / 5.7047 at spectral radius 0.3 / 0.8 / 0.9
+    # the load it comes to rest at, measured: 5.6994 (time_step_scale 1), 5.6557 (0.5),
+    # 5.6428 (0.25); 5.7061 / 5.6866 / 5.6884 at spectral radius 0.3 / 0.8 / 0.9
     base = _after_drop(_run(residual=True)[1])[1]
     half = _after_drop(_run(residual=True, time_step_scale=0.5)[1])[1]
     assert half == pytest.approx(base, rel=1e-2)
@@ -153,8 +156,49 @@ def test_where_the_bar_comes_to_rest_converges_with_the_time_step_and_dissipatio
 
 def test_more_damping_overshoots_less():
     # physics, not numerics: the damping ratio at the first mode sets how far the motion
-    # overshoots, and with it how far the weak element unloads (5.56, 5.70, 5.96 at 0.025,
+    # overshoots, and with it how far the weak element unloads (5.56, 5.70, 5.97 at 0.025,
     # 0.05, 0.1): reported, and monotone
     loads = [_after_drop(_run(residual=True, damping_ratio=xi)[1])[1] for xi in (0.025, 0.1)]
     base = _after_drop(_run(residual=True)[1])[1]
     assert loads[0] < base < loads[1]
+
+
+def _first_drop(steps):
+    peak, after = _after_drop(steps)
+    return steps[peak + 1][0], after
+
+
+def test_the_drop_ends_where_the_motion_no_longer_moves_its_equilibrium(monkeypatch):
+    # the static step from the moving state finds the same equilibrium half a period apart:
+    # the drop ends there with half its largest kinetic energy still in the vibration, which
+    # the damping would take without changing where the bar rests: held on until the kinetic
+    # energy alone ends it (the rule before), the motion rests on the same load to round-off
+    # (measured: 40 against 170 time steps, 1.6 against 8.3 ms, loads equal to 1e-14)
+    drop, after = _first_drop(_run(residual=True)[1])
+    assert drop.path_energy.kinetic > 0.1 * drop.path_energy.largest_kinetic
+    monkeypatch.setattr(dynamic._Drop, "_agrees", lambda self, before, after: False)
+    problem, initial = massive_bar(True)
+    chosen = replace(newton_settings(0.15, 0.02, cuts=3, trace=False),
+                     on_snap_back="continue")
+    damped, damped_after = _first_drop(list(follow_path(problem, chosen, initial)))
+    assert damped_after == pytest.approx(after, rel=1e-9)
+    assert drop.forensics["time_steps"][0] < 0.5 * damped.forensics["time_steps"][0]
+    assert damped.path_energy.kinetic < 0.02 * damped.path_energy.largest_kinetic
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.5])
+def test_a_time_step_never_grows_past_a_twentieth_of_the_first_period(scale):
+    # a drop standing still (here: at rest on its equilibrium, its end not yet tried) has no
+    # local error to bound its steps; unbounded they doubled to 1e157 s on CF-4 at 10.93 mm,
+    # where an implicit step that long damps the growth of the unstable mode it was to follow
+    problem, initial = massive_bar(residual=False)
+    settings = replace(newton_settings(0.15, 0.02, cuts=3, trace=False), time_step_scale=scale)
+    dynamics = dynamic.drop_dynamics(problem, settings, omega=2.0 * np.pi * 1000.0)
+    drop = dynamic._Drop(problem, settings, initial,
+                         DisplacementControl(problem.control_equation, 0.0), 0.0, dynamics)
+    sizes = []
+    for _ in range(30):
+        assert drop.advance()
+        sizes.append(drop.dt)
+    assert max(sizes) == pytest.approx(scale * dynamic.LARGEST_STEP * dynamics.period)
+    assert np.all(np.abs(drop.motion.u) == 0.0)

@@ -17,7 +17,13 @@ from test_newton import newton_bar, newton_settings
 from icewall.errors import ConvergenceError
 from icewall.solve.controls import StrokeControl
 from icewall.solve.path import follow_path
-from icewall.solve.stability import _parity, determinant_sign, stable_under_stroke
+from icewall.solve.stability import (
+    _parity,
+    determinant_sign,
+    fastest_growth,
+    held_tangent,
+    stable_under_stroke,
+)
 
 
 @pytest.mark.parametrize("n", [1, 7, 60, 300])
@@ -64,11 +70,9 @@ def test_a_bar_that_snaps_back_is_unstable_on_its_descending_branch():
     assert len(descending) > 3 and not any(descending)
 
 
-def test_modes_that_grow_slower_than_the_margin_do_not_count():
-    # the snap-back bar with its mass, on its descending branch: unstable without the margin
-    # and at its own first-mode frequency (the snap-back is fast), stable only once the
-    # margin's (0.01 omega)^2 M outweighs the softening (an absurd omega: the units and the
-    # direction of the shift)
+def _descending_massive_bar():
+    """The snap-back bar with its mass at a state of its descending branch (traced
+    statically), its first-mode frequency and the stroke's weights."""
     from test_dynamic_drop import massive_bar
 
     from icewall.solve.integrator import first_mode_frequency
@@ -85,7 +89,37 @@ def test_modes_that_grow_slower_than_the_margin_do_not_count():
     P = np.array([inc.load_factor for inc in steps])
     descending = steps[int(np.flatnonzero(P >= P.max() * (1 - 1e-9))[-1]) + 2]
     assert descending.load_factor < 0.9 * P.max()
-    ev = descending.evaluation
+    return problem, descending.evaluation, omega, weights
+
+
+def test_modes_that_grow_slower_than_the_margin_do_not_count():
+    # the snap-back bar with its mass, on its descending branch: unstable without the margin
+    # and at its own first-mode frequency (the snap-back is fast), stable only once the
+    # margin's (0.01 omega)^2 M outweighs the softening (an absurd omega: the units and the
+    # direction of the shift)
+    problem, ev, omega, weights = _descending_massive_bar()
     assert not stable_under_stroke(problem, ev, weights)
     assert not stable_under_stroke(problem, ev, weights, omega)
     assert stable_under_stroke(problem, ev, weights, 1e6 * omega)
+
+
+def test_the_fastest_growth_rate_bounds_the_dense_one_within_a_factor_two():
+    # on the descending branch of the snap-back bar one mode of M u'' + K u = 0 grows: its
+    # rate sqrt(-lambda), lambda the negative eigenvalue of the dense pencil (K, M), lies in
+    # the scan's last cell [rate / 2, rate]; a stable state has none, and a bound below the
+    # rate answers the bound (no time step above its inverse resolves the growth)
+    import scipy.linalg
+
+    problem, ev, omega, weights = _descending_massive_bar()
+    A, mass = held_tangent(problem, ev, weights)
+    eigenvalues = scipy.linalg.eigh(A.toarray(), np.diag(mass), eigvals_only=True)
+    assert np.count_nonzero(eigenvalues < 0.0) == 1
+    exact = float(np.sqrt(-eigenvalues.min()))
+    rate = fastest_growth(problem, ev, weights, omega, 1e6 * omega)
+    assert 0.5 * rate <= exact <= rate
+    assert fastest_growth(problem, ev, weights, omega, 0.5 * exact) == 0.5 * exact
+    from test_dynamic_drop import massive_bar
+
+    elastic = follow_path(problem, newton_settings(0.001, 0.001), massive_bar(False)[1])
+    assert fastest_growth(problem, next(elastic)[0].evaluation, weights, omega,
+                          1e6 * omega) == 0.0
