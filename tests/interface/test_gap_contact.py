@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from icewall.errors import ConvergenceError
 from icewall.interface import (
@@ -26,6 +27,13 @@ from icewall.interface import (
     split_solution,
     update_states,
 )
+from icewall.interface.augmented import (
+    PIVOT_RTOL,
+    EquilibratedLU,
+    column_max_abs,
+    pivot_scales,
+)
+from icewall.sparse import superlu_options
 
 MU, N = 0.5, 1000.0
 
@@ -202,6 +210,40 @@ def test_floating_core_is_singular_with_a_helpful_message(driver):
     with pytest.raises(ConvergenceError, match="singular"):
         factorize(augmented_matrix(m.K, m.C, _all_free(len(m.pairs), one), m.fixed)).solve(
             np.ones(A.shape[0]))
+
+
+@pytest.mark.parametrize("mass_term", [0.0, 1e13, 1e14])
+def test_a_mass_term_makes_no_pair_system_singular(driver, mass_term):
+    """A dynamic drop's mass term M / (beta dt^2) (CF-4: 1e12-1e14 N/mm at dt = 6e-9 s) makes
+    the pair rows' pivots -C K^-1 C^T about |C|^2 / diag, far below the largest entry of their
+    columns (the pivot test's scale), and row exchanges carry such pivots into displacement
+    columns: the test fails on a healthy matrix. Its equilibrated form passes and solves to
+    round-off; without a mass term the factorisation is the plain one, and the floating core
+    stays singular."""
+    m = driver.model(concrete_on_top=False)
+    K = m.K + mass_term * sp.eye(m.K.shape[0])
+    gaps = GapState.initial(len(m.pairs))  # every pair FIXED
+    A = sp.csc_matrix(augmented_matrix(K, m.C, gaps, m.fixed))
+    b = np.random.default_rng(0).standard_normal(A.shape[0])
+    factor = factorize(A)
+    assert isinstance(factor.lu, EquilibratedLU) == bool(mass_term)
+    x = factor.solve(b)
+    assert factor.lu.backward_error(b, x) < 1e-15
+    dense = np.linalg.solve(A.toarray(), b)
+    for block in (slice(0, m.n_eq), slice(m.n_eq, None)):  # displacements, multipliers
+        assert np.abs(x[block] - dense[block]).max() <= 1e-6 * np.abs(dense[block]).max()
+    schur = pivot_scales(A)[m.n_eq:]  # sum_i C_ji^2 / K_ii per multiplier row
+    C = sp.csr_matrix(m.C)
+    diagonal = np.where(np.isin(np.arange(m.n_eq), m.fixed), np.inf, K.diagonal())
+    expected = np.asarray(C.multiply(C) @ (1.0 / diagonal)).ravel()
+    np.testing.assert_allclose(schur, expected, rtol=1e-12)
+    if mass_term:
+        lu = spla.splu(A, **superlu_options())  # the plain test fails: healthy pivots flagged
+        column = np.argsort(lu.perm_c)
+        assert np.any(np.abs(lu.U.diagonal()) <= PIVOT_RTOL * column_max_abs(A)[column])
+    else:
+        with pytest.raises(ConvergenceError, match="add fixed points"):
+            factorize(augmented_matrix(K, m.C, _all_free(len(m.pairs)), m.fixed)).solve(b)
 
 
 def test_core_with_fixed_points_is_solvable(driver):
