@@ -205,7 +205,8 @@ class Concrete:
         choices=("exponential", "linear"))
     substep_ratio: float = option(0.5, doc="largest strain sub-step of the stress update, as a "
                                   "fraction of the cracking strain f't/E (forward-Euler "
-                                  "accuracy of Fig. 3.12 over large increments)",
+                                  "accuracy of Fig. 3.12 over large increments); only "
+                                  "trial_stress incremental is sub-stepped",
                                   exclusive_minimum=0.0, maximum=1000.0)
 
 
