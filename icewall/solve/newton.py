@@ -7,8 +7,10 @@ active-set Newton on the contact and stick-slip conditions), solve for the refer
 the unbalance (bordering, eq. 3.48: the control displacement reaches its target exactly after
 every full step), and take the step scaled by a backtracking line search on the equilibrium
 norm. Converged means: displacement norm (eq. 4.4) and load norm (eq. 4.5) within the
-tolerances, and no pair changed state in the last iteration; the constitutive law is never
-frozen or relaxed, so a converged increment is an equilibrium of the law as it is.
+tolerances, the control's constraint met (a step of length eta leaves 1 - eta of it: an
+equilibrium short of the target is not the increment asked for), and no pair changed state in
+the last iteration; the constitutive law is never frozen or relaxed, so a converged increment
+is an equilibrium of the law as it is.
 """
 
 from __future__ import annotations
@@ -40,6 +42,9 @@ Newton iteration cycling among the branches of kinked laws (a softening point lo
 unloading, an axis swap, a pair opening and closing) does not converge by going on; the path
 following cuts or bisects the step (docs/solver.md, item 38)."""
 STALL_GAIN = 0.9
+CONTROL_ROUNDOFF = 1e-12
+"""A control's constraint is met within this fraction of its target besides the displacement
+tolerance of the increment's change (the round-off of a held target)."""
 LINE_SEARCH_RISE = 4.0
 """While the pair states still change, a step is backtracked only when its unbalance exceeds
 this multiple of the current one (the active set walks the load; a decrease is not required);
@@ -65,6 +70,12 @@ class Iterate:
     def load_norm(self) -> float:
         """Eq. 4.5."""
         return _norm(self.unbalance) / self.scale
+
+
+def _control_unmet(control, u: np.ndarray, P: float) -> float:
+    """|phi(u, P)| of the control's constraint (0 for load control, which has none)."""
+    residual = getattr(control, "residual", None)
+    return 0.0 if residual is None else abs(residual(u, P))
 
 
 def _evaluate(problem: Problem, start: PathState, u: np.ndarray, P: float,
@@ -136,6 +147,9 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
     forensics["chords"] = []
     limit = settings.max_iterations
     stall = _Stall(settings)
+    # the constraint met: within the displacement tolerance of the increment's change
+    unmet = (settings.tolerance_displacement * _control_unmet(control, start.u, start.load_factor)
+             + CONTROL_ROUNDOFF * abs(getattr(control, "target", 0.0)))
     for iteration in range(1, limit + 1):
         log.debug("newton %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
                   "gap flips %d, Gauss-point flag changes %s, step length %s", iteration,
@@ -147,6 +161,7 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         displacement_ok = disp_norm <= settings.tolerance_displacement or (
             iteration == 2 and current.load_norm <= 0.01 * settings.tolerance_load)
         if (iteration > 1 and displacement_ok and current.load_norm <= settings.tolerance_load
+                and _control_unmet(control, current.u, current.load_factor) <= unmet
                 and (flips == 0 or _constraints_hold(problem, settings, current))):
             return Increment(kind, -float(current.u[problem.control_equation]),
                              current.load_factor, preload_factor, iteration - 1, disp_norm,
@@ -294,13 +309,17 @@ def _line_search(problem: Problem, start: PathState, current: Iterate, du: np.nd
                  rise: float, dampers: Dampers | None = None) -> tuple[float, Iterate]:
     """Step length eta and the iterate it gives: the full step unless its unbalance (with the
     gap multipliers moved by eta dlam at their current states) exceeds `rise` times the
-    current one; then halve, keeping the best step length tried."""
+    current one; then halve, keeping the best step length tried. Both unbalances are taken
+    against the load the full step aims at, P + dP: the bordered step solves equilibrium and
+    the control's constraint together, and the constraint's part of the unbalance is the
+    load it still asks for, (1 - eta) dP R (at a converged start the current unbalance
+    alone is round-off, against which any step looks worse)."""
     eta, best, full = 1.0, None, None  # full: the trial of the full step
-    reference = _norm(current.unbalance)
+    reference = _norm(current.unbalance + dP * R)
     for _ in range(LINE_SEARCH_CUTS + 1):
         trial = _evaluate(problem, start, current.u + eta * du, current.load_factor + eta * dP,
                           F_pre, R, _trial_gap_force(problem, dm, eta), dampers)
-        merit = _norm(trial.unbalance)
+        merit = _norm(trial.unbalance + (1.0 - eta) * dP * R)
         full = full or trial
         if best is None or merit < best[0]:
             best = (merit, eta, trial)

@@ -114,10 +114,19 @@ def test_snap_back_is_traced_by_dissipation_control(moved):
     sigma = P / area
     softened = (length - h) * sigma / E + h * (f / E + (f - sigma) / f * (eps_f - f / E))
     assert np.allclose(d[:peak + 1], ascending[:peak + 1], rtol=1e-9)
-    assert np.allclose(d[peak + 1:], softened[peak + 1:], rtol=1e-8)  # the closed form
-    assert np.all(np.diff(d[peak:]) < 0) and np.all(np.diff(P[peak:]) < 0)  # snap-back
-    assert all(inc.snap_back for inc in steps[peak + 1:])
-    assert P[-1] < 0.01 * P[peak] and d[-1] == pytest.approx(h * eps_f, rel=0.01)
+    # the closed form down to the separated bar; the step that separates it may open the weak
+    # element past its failure strain (P = 0, the weak element taking the stretch d / h:
+    # every d >= h eps_f is that equilibrium)
+    carrying = np.flatnonzero(P > 1e-6 * P[peak])
+    assert np.allclose(d[peak + 1:carrying[-1] + 1], softened[peak + 1:carrying[-1] + 1],
+                       rtol=1e-8)
+    assert np.all(np.diff(d[peak:carrying[-1] + 1]) < 0)  # the snap-back
+    assert all(inc.snap_back for inc in steps[peak + 1:carrying[-1] + 1])
+    assert np.all(np.diff(P[peak:]) < 0)
+    assert P[-1] < 0.01 * P[peak] and d[-1] >= h * eps_f * (1 - 0.01)
+    if P[-1] <= 1e-6 * P[peak]:
+        strain = steps[-1].evaluation.strain[:, :, 0]
+        assert np.allclose(strain[0], d[-1] / h, rtol=1e-6)
 
 
 def test_step_size_controller_aims_at_the_target_iterations():
@@ -232,7 +241,7 @@ def test_a_separated_bar_is_followed_by_drops_at_fixed_deflections(moved):
     # it, displacement control at zero load or another drop: the same solution, as the
     # round-off of the singular tangent decides)
     separated = int(np.flatnonzero(np.abs(P) <= 1e-6 * P[peak])[0])
-    assert d[separated] == pytest.approx(h * eps_f, rel=1e-5)
+    assert d[separated] >= h * eps_f * (1 - 1e-5)  # at or past the weak element's failure
     assert steps[separated + 1][0].snap_back
     assert beyond.size >= 3 and np.all(np.abs(P[beyond]) <= 1e-6 * P[peak])
     for i in beyond:
@@ -402,3 +411,36 @@ def test_the_stall_rule_cuts_plateaus_and_never_falling_norms():
         creeping = _Stall(tolerances)
         fired = [k for k in range(2, 200) if creeping.stalled(k, 1e-3 * rate ** k, 0.0)]
         assert bool(fired) == stalls
+
+
+def test_a_line_searched_equilibrium_short_of_the_target_is_not_converged(monkeypatch):
+    """A step of length eta reaches 1 - eta of the control's change only. On a linear bar the
+    half step of the first iteration is an exact equilibrium (its load norm passes 100 times
+    tighter, which the second iterate may use for its displacement norm), yet it is at half
+    the target deflection: the increment goes on to the target (the crawl of docs/solver.md
+    item 41, where such increments were taken as converged steps 1/16 of their size)."""
+    import icewall.solve.newton as newton_module
+    from icewall.solve.controls import DisplacementControl
+
+    problem, initial = newton_bar(100.0, 5, strength=1e9)
+    true_search, lengths = newton_module._line_search, []
+
+    def half_first(problem, start, current, du, dP, dm, F_pre, R, rise, dampers=None):
+        if lengths:
+            eta, trial = true_search(problem, start, current, du, dP, dm, F_pre, R, rise,
+                                     dampers)
+        else:
+            eta = 0.5
+            trial = newton_module._evaluate(
+                problem, start, current.u + eta * du, current.load_factor + eta * dP, F_pre,
+                R, newton_module._trial_gap_force(problem, dm, eta), dampers)
+        lengths.append(eta)
+        return eta, trial
+
+    monkeypatch.setattr(newton_module, "_line_search", half_first)
+    inc = newton_module.newton_increment(
+        problem, newton_settings(0.01, 0.01, tolerance=1e-6), initial,
+        DisplacementControl(problem.control_equation, 0.01), 0.0)
+    assert lengths[0] == 0.5 and inc.iterations == len(lengths) > 1
+    assert inc.control_displacement == pytest.approx(0.01, rel=1e-12)
+    assert inc.load_factor == pytest.approx(30000.0 * 0.01 / 100 * 10, rel=1e-9)
