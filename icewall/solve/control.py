@@ -24,10 +24,8 @@ from icewall.model.structure import Evaluation
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
 
-# A converged increment whose load falls by more than this fraction of the largest load so
-# far is suspect: on a continuous branch the drop shrinks with the step; at a snap-back of the
-# control displacement it does not (the solver found a distant equilibrium). Halve the step;
-# if the drop persists at the smallest step, stop with reason "snap-back".
+# a load fall above this fraction of the largest load in one increment is suspect (a distant
+# equilibrium past a snap-back): halved, and at the smallest step a stop ("snap-back")
 SNAP_BACK_DROP = 0.25
 MIN_RELAXATION = 0.125
 MAX_RELAXATION = 1.0
