@@ -3,9 +3,9 @@ over a file it did not create (issue 38; the rules the run's HDF5 output always 
 output: tables, baselines, figures, reports, exports, meshes, schemas, checkpoints, results).
 
 * Content goes to a new temporary file beside the destination, created exclusively and without
-  following links (``O_CREAT | O_EXCL | O_NOFOLLOW``) under an unpredictable name (``.NAME.
-  XXXXXXXXXXXX.tmp``), or, for a library that writes by file name (meshio, gmsh), into a private
-  temporary directory beside it (``mkdtemp``) under the destination's own name.
+  following links (``O_CREAT | O_EXCL | O_NOFOLLOW``) under an unpredictable name (``.NAME.``,
+  12 random characters, ``.tmp``), or, for a library that writes by file name (meshio, gmsh),
+  into a private temporary directory beside it (``mkdtemp``) under the destination's own name.
 * The destination may be absent, or a regular file that its :class:`Kind` recognises as one
   icewall wrote (a header or a mark in its first bytes). A symbolic link, a directory or other
   non-file, a file icewall did not write, or a read-only file is refused (:class:`ResultError`,

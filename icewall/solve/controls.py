@@ -28,6 +28,9 @@ import numpy as np
 class LoadControl:
     """The load factor is held (the preload's increments are applied by load control)."""
 
+    def residual(self, u: np.ndarray, P: float) -> float:
+        return 0.0  # no constraint to reach
+
     def correction(self, u: np.ndarray, P: float, q1: np.ndarray, q2: np.ndarray) -> float:
         return 0.0
 

@@ -72,12 +72,6 @@ class Iterate:
         return _norm(self.unbalance) / self.scale
 
 
-def _control_unmet(control, u: np.ndarray, P: float) -> float:
-    """|phi(u, P)| of the control's constraint (0 for load control, which has none)."""
-    residual = getattr(control, "residual", None)
-    return 0.0 if residual is None else abs(residual(u, P))
-
-
 def _evaluate(problem: Problem, start: PathState, u: np.ndarray, P: float,
               F_pre: np.ndarray, R: np.ndarray, lam_force: np.ndarray | None = None,
               dampers: Dampers | None = None) -> Iterate:
@@ -148,7 +142,7 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
     limit = settings.max_iterations
     stall = _Stall(settings)
     # the constraint met: within the displacement tolerance of the increment's change
-    unmet = (settings.tolerance_displacement * _control_unmet(control, start.u, start.load_factor)
+    unmet = (settings.tolerance_displacement * abs(control.residual(start.u, start.load_factor))
              + CONTROL_ROUNDOFF * abs(getattr(control, "target", 0.0)))
     for iteration in range(1, limit + 1):
         log.debug("newton %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
@@ -161,7 +155,7 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
         displacement_ok = disp_norm <= settings.tolerance_displacement or (
             iteration == 2 and current.load_norm <= 0.01 * settings.tolerance_load)
         if (iteration > 1 and displacement_ok and current.load_norm <= settings.tolerance_load
-                and _control_unmet(control, current.u, current.load_factor) <= unmet
+                and abs(control.residual(current.u, current.load_factor)) <= unmet
                 and (flips == 0 or _constraints_hold(problem, settings, current))):
             return Increment(kind, -float(current.u[problem.control_equation]),
                              current.load_factor, preload_factor, iteration - 1, disp_norm,
