@@ -144,7 +144,7 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
     # the constraint met: within the displacement tolerance of the increment's change
     unmet = (settings.tolerance_displacement * abs(control.residual(start.u, start.load_factor))
              + CONTROL_ROUNDOFF * abs(getattr(control, "target", 0.0)))
-    for iteration in range(1, limit + 1):
+    for iteration in range(1, limit + 2):  # the last correction's iterate is tested too
         log.debug("newton %d: displacement norm %.3e, load norm %.3e, load factor %.6g, "
                   "gap flips %d, Gauss-point flag changes %s, step length %s", iteration,
                   disp_norm, current.load_norm, current.load_factor, flips,
@@ -165,6 +165,8 @@ def newton_increment(problem: Problem, settings: SolverSettings, start: PathStat
                              f"(the norms have not fallen below {STALL_GAIN:g} of their best "
                              f"for {STALL_ITERATIONS}; displacement norm {disp_norm:.3g}, load "
                              f"norm {current.load_norm:.3g})", "non-convergence")
+        if iteration > limit:
+            break
         tangent = problem.structure.with_tangent(current.evaluation)
         matrix_at = tangent
         if iteration == 1 and last_increment is not None and _norm(last_increment) > 0.0:

@@ -444,3 +444,18 @@ def test_a_line_searched_equilibrium_short_of_the_target_is_not_converged(monkey
     assert lengths[0] == 0.5 and inc.iterations == len(lengths) > 1
     assert inc.control_displacement == pytest.approx(0.01, rel=1e-12)
     assert inc.load_factor == pytest.approx(30000.0 * 0.01 / 100 * 10, rel=1e-9)
+
+
+def test_the_iterate_of_the_last_allowed_correction_is_tested():
+    """An increment that converges on its last allowed correction is converged: the linear
+    bar, exact after one Newton step, with a limit of one iteration (before, the iterate of
+    the last correction was computed and never tested, so such a try failed)."""
+    from icewall.solve.controls import DisplacementControl
+    from icewall.solve.newton import newton_increment
+
+    problem, initial = newton_bar(100.0, 5, strength=1e9)
+    inc = newton_increment(problem, replace(newton_settings(0.01, 0.01, tolerance=1e-6),
+                                            max_iterations=1),
+                           initial, DisplacementControl(problem.control_equation, 0.01), 0.0)
+    assert inc.iterations == 1
+    assert inc.load_factor == pytest.approx(30000.0 * 0.01 / 100 * 10, rel=1e-9)
