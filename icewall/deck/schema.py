@@ -170,7 +170,10 @@ class Concrete:
         "scaled through the committed point (sigma = sigma_env(eps) E_i max|eps_iu| / "
         "sigma_env(max|eps_iu|)): continuous, the same law on a fixed ray, and past the peak "
         "the exponential decay of eq. 3.11 from the stress the point has, so that the energy "
-        "it dissipates is sigma / k of eqs. 3.26-3.30", choices=("envelope", "scaled"))
+        "it dissipates is sigma / k of eqs. 3.26-3.30; and a closing crack (a crushed "
+        "direction in tension) leaves its secant line where it meets the envelope on its ray, "
+        "the one it then follows (under envelope: where it meets the uniaxial envelope, and "
+        "the stress jumps onto the ray's)", choices=("envelope", "scaled"))
     trial_stress: str = option(
         "corotational", doc="trial stress of Fig. 3.12 step 3: corotational = committed "
         "principal stresses carried with the rotating axes plus C dEps between the committed "

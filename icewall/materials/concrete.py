@@ -104,8 +104,6 @@ def loading_directions(trial: np.ndarray, eps_u: np.ndarray, state: ConcreteStat
     """(loading, sign_change) (n, 3) bool of Fig. 3.12 step 6 for the trial stress and its
     eps_iu: loading where |eps_iu| passes its maximum (Fig. 3.13); sign_change where eps_iu
     has left the sign of the committed uniaxial strength."""
-    # a direction that changes sign never unloads along a secant above its new envelope
-    # (checked against the uniaxial envelope, so that a zero increment stays an unloading)
     sign_change = changes_sign(eps_u, state.uniaxial_strength)
     # round-off of the rotation is relative to the point's largest stress, not to sigma_i
     loading = loads(eps_u, state.max_equivalent_uniaxial_strain,
@@ -113,20 +111,37 @@ def loading_directions(trial: np.ndarray, eps_u: np.ndarray, state: ConcreteStat
                     LOADING_TOLERANCE)
     rows = np.nonzero(sign_change.any(axis=1))[0]
     if rows.size:
-        tensile = eps_u[rows] > 0.0
-        uniaxial_stress, _ = _envelope(eps_u[rows], np.where(tensile, params.ft, -params.fc),
-                                       np.where(tensile, params.eps_t, -params.eps_c), params,
-                                       rows)
         # a direction past its peak on the other sign's branch (cracked, now closing in
         # compression, or crushed, now in tension) loads only where its secant line meets the
-        # new envelope: its max |eps_iu| belongs to the other branch, and loading onto this
-        # branch at that magnitude makes the stress jump (a closing crack leapt from its crack
-        # secant to the compression envelope: VTT1 cycled between the two at 38.6 mm)
+        # envelope: its max |eps_iu| belongs to the other branch, and loading onto this branch
+        # at that magnitude makes the stress jump (a closing crack leapt from its crack secant
+        # to the compression envelope: VTT1 cycled between the two at 38.6 mm). The continuous
+        # reading (`fallen_strength: scaled`) takes the envelope the direction then follows,
+        # sigma_ic, eps_ic on the trial stress's ray (step 5); the uniaxial one, which a crack
+        # closing under lateral compression meets where the ray's envelope stands far higher,
+        # lets the stress jump there (docs/solver.md item 42: CF-4, 24 MPa at 9.48 mm)
+        if getattr(params, "fallen_strength", "envelope") == "scaled":
+            strength, peak_strain = _ray_strengths(trial, eps_u, state, params, rows)
+        else:  # the uniaxial envelope (as before item 42)
+            tensile = eps_u[rows] > 0.0
+            strength = np.where(tensile, params.ft, -params.fc)
+            peak_strain = np.where(tensile, params.eps_t, -params.eps_c)
+        envelope, _ = _envelope(eps_u[rows], strength, peak_strain, params, rows)
         loading[rows] = loads_across_zero(loading[rows], sign_change[rows],
                                           state.cracked[rows] | state.crushed[rows],
-                                          state.secant_modulus[rows], eps_u[rows],
-                                          uniaxial_stress)
+                                          state.secant_modulus[rows], eps_u[rows], envelope)
     return loading, sign_change
+
+
+def _ray_strengths(trial: np.ndarray, eps_u: np.ndarray, state: ConcreteState, params: Any,
+                   rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Step 5 at the points `rows`: sigma_ic, eps_ic (each (m, 3)) on the ray of the trial
+    stress (errata 1.3); "fig3.12_step5": as printed, the stress known before step 6, the
+    committed one in the committed axes."""
+    on_ray = (local_normal_components(state.stress[rows], state.angle[rows], 2.0)
+              if "fig3.12_step5" in getattr(params, "printed_forms", ()) else trial[rows])
+    strength = equivalent_uniaxial_strengths(on_ray, params, strain_sign=eps_u[rows])
+    return strength, equivalent_uniaxial_peak_strains(strength, params)
 
 
 def past_peak(eps_u: np.ndarray, cracked: np.ndarray, crushed: np.ndarray,
@@ -203,13 +218,8 @@ def _curve_parameters(trial: np.ndarray, eps_u: np.ndarray, loading: np.ndarray,
     envelope_stress, envelope_secant = np.abs(trial), state.secant_modulus.copy()
     loads = np.nonzero(loading.any(axis=1))[0]
     if loads.size:
-        # Fig. 3.12 step 5: the trial stress (errata 1.3); "fig3.12_step5": as printed, the
-        # stress known before step 6, the committed one in the committed axes
-        on_ray = (local_normal_components(state.stress[loads], state.angle[loads], 2.0)
-                  if "fig3.12_step5" in getattr(params, "printed_forms", ()) else trial[loads])
-        strength[loads] = equivalent_uniaxial_strengths(on_ray, params,
-                                                        strain_sign=eps_u[loads])
-        peak_strain[loads] = equivalent_uniaxial_peak_strains(strength[loads], params)
+        strength[loads], peak_strain[loads] = _ray_strengths(trial, eps_u, state, params,
+                                                             loads)
         kept = past_peak(eps_u[loads], state.cracked[loads], state.crushed[loads],
                          sign_change[loads], params)
         strength[loads] = np.where(kept, state.uniaxial_strength[loads], strength[loads])

@@ -215,15 +215,18 @@ def trial_pass(strain, major, S, frozen, has_frozen, corotational, plane_strain,
 @jit
 def ray_pass(S, prm, W, B, decayed, lode_x, lode_y):
     """The loading test of a direction changing sign (where its secant line meets the uniaxial
-    envelope; decayed = exp(-A)); where a direction loads, the unit ray of the trial stress
-    into W[:, W_RAY] and the arguments of its Lode angle's atan2 into lode_x, lode_y."""
+    envelope; decayed = exp(-A); under P_SCALED the envelope on the ray, in finish_pass);
+    where a direction loads or is so tested, the unit ray of the trial stress into W[:, W_RAY]
+    and the arguments of its Lode angle's atan2 into lode_x, lode_y."""
     s_secant, s_cracked, s_crushed = S[5], S[10], S[11]
     E0, fc = prm[P_E0], prm[P_FC]
     for i in range(W.shape[0]):
         any_loading = False
         for k in range(3):
             loading = B[i, B_LOADING, k]
-            if B[i, B_SIGN_CHANGE, k]:
+            if B[i, B_SIGN_CHANGE, k] and prm[P_SCALED] != 0.0:
+                loading = True  # on the ray: finish_pass decides (concrete.loading_directions)
+            elif B[i, B_SIGN_CHANGE, k]:
                 eps_u = W[i, W_EPS_U, k]
                 tensile = eps_u > 0.0
                 uniaxial_stress = envelope(abs(eps_u), prm[P_FT] if tensile else fc,
@@ -294,6 +297,10 @@ def finish_pass(S, frozen, has_frozen, prm, W, B, decayed, decayed_max, O):
                 env_stress, env_secant = envelope(abs(eps_u), abs(W[i, W_STRENGTH, k]),
                                                   abs(W[i, W_PEAK, k]), E0, decayed[i, k],
                                                   prm[P_SECANT_FLOOR])
+                if prm[P_SCALED] != 0.0 and B[i, B_SIGN_CHANGE, k]:  # ray_pass's deferral
+                    B[i, B_LOADING, k] = loads_across_zero(
+                        B[i, B_LOADING, k], True, s_cracked[i, k] | s_crushed[i, k], E,
+                        eps_u, env_stress)
                 if prm[P_SCALED] != 0.0:
                     at_max = envelope(s_max[i, k], abs(W[i, W_STRENGTH, k]),
                                       abs(W[i, W_PEAK, k]), E0, decayed_max[i, k],
