@@ -169,8 +169,8 @@ def dynamic_drop(problem: Problem, settings: SolverSettings, state: PathState, c
         if end is not None:
             return end
     raise StepFailed(f"dynamic drop: not at rest after {MAX_TIME_STEPS} time steps "
-                     f"(t = {drop.time:.4g} s, kinetic energy {drop.energy.kinetic:.3g} N mm)",
-                     "non-convergence")
+                     f"(t = {drop.time:.4g} s, kinetic energy {drop.energy.kinetic:.3g} N mm)"
+                     f"{drop.unstable_rest()}", "non-convergence")
 
 
 class _Drop:
@@ -268,13 +268,10 @@ class _Drop:
         if self.time < self.ramp_time:
             return None
         e = self.energy
-        if e.kinetic <= KINETIC_END * (e.kinetic + e.damping):
-            static = static_load_norm(self.problem, self.current, self.start.load_scale)
-            if (static <= self.settings.tolerance_load  # at rest as it stands, both norms
-                    and self.current.displacement_norm <= self.settings.tolerance_displacement
-                    and self._stable(self.current)):
-                return _ended(self.current, static, self.iterations, self.steps, self.time,
-                              self.energy, self.start)
+        static = self._resting()
+        if static is not None and self._stable(self.current):
+            return _ended(self.current, static, self.iterations, self.steps, self.time,
+                          self.energy, self.start)
         if self.time < self.next_check:
             return None
         self.next_check = self.time + CHECK_PERIODS * self.period
@@ -306,6 +303,28 @@ class _Drop:
         static = static_load_norm(self.problem, inc, self.start.load_scale)
         return _ended(inc, static, self.iterations + inc.iterations, self.steps, self.time,
                       self.energy, self.start)
+
+    def _resting(self) -> float | None:
+        """The static load norm of the current state where it is at rest as it stands: the
+        kinetic energy below KINETIC_END of what the drop put into motion, the static
+        unbalance within the load tolerance, the last correction within the displacement
+        tolerance. None otherwise."""
+        e = self.energy
+        if self.steps == 0 or e.kinetic > KINETIC_END * (e.kinetic + e.damping):
+            return None
+        static = static_load_norm(self.problem, self.current, self.start.load_scale)
+        if (static <= self.settings.tolerance_load
+                and self.current.displacement_norm <= self.settings.tolerance_displacement):
+            return static
+        return None
+
+    def unstable_rest(self) -> str:
+        """Why a drop did not end, where it is at rest on an equilibrium that is unstable with
+        the stroke held (else ''): no motion is left to leave it by."""
+        if self._resting() is None or self._stable(self.current):
+            return ""
+        return ("; it rests on an equilibrium within the tolerances that is unstable with the "
+                "stroke held, with no motion left to leave it by (docs/solver.md, item 42)")
 
     def _resolve_growth(self, unstable: Increment) -> None:
         """Bound the time step by RESOLVED_GROWTH over the fastest growth rate at `unstable`."""
