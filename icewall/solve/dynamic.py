@@ -36,12 +36,14 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
 from icewall.errors import ConvergenceError
 from icewall.solve.control import Increment, PathState, StepFailed
+from icewall.solve.energy import DropEnergy
+from icewall.solve.imperfection import Seed
 from icewall.solve.integrator import Dynamics, GeneralizedAlpha, Motion, TimeStep, ramp
 from icewall.solve.newton import newton_increment, static_load_norm
 from icewall.solve.problem import Problem
@@ -92,61 +94,6 @@ RAMP_PERIODS = 1.0
 """The held quantity moves from where the static path left it to the drop's target over this
 many first periods, on a smooth (1 - cos) ramp: the stroke of a test moves on while the wall
 begins to fall. (A jump would impose an infinite acceleration on the held point.)"""
-
-
-@dataclass
-class DropEnergy:
-    """Work terms of one drop summed over its time steps (N mm)."""
-
-    external: float = 0.0
-    internal: dict[str, float] = field(default_factory=dict)
-    friction: float = 0.0
-    damping: float = 0.0
-    kinetic: float = 0.0  # at the end
-    largest_kinetic: float = 0.0
-
-    def add(self, problem: Problem, before: Increment | PathState, after: Increment,
-            step: TimeStep, motion: Motion, F_pre: np.ndarray) -> None:
-        """A committed time step: the trapezoidal work of the loads, the stresses and the
-        damping, the friction work and the kinetic energy at its end."""
-        self._static_terms(problem, before, after, F_pre)
-        v_mean = 0.5 * (step.start.v + motion.v)
-        self.damping += float(problem.constraints.restrict(step.damping * v_mean)
-                              @ (after.u - before.u))
-        self.kinetic = 0.5 * float(motion.v @ (step.mass * motion.v))
-        self.largest_kinetic = max(self.largest_kinetic, self.kinetic)
-
-    def close(self, problem: Problem, before: Increment, after: Increment,
-              F_pre: np.ndarray) -> None:
-        """The static step that ends the drop: its work terms; `kinetic` becomes what it took
-        out of the account (the kinetic energy left and the work of the forces the inertia
-        held)."""
-        self.kinetic += self.net_work(problem, before, after, F_pre)
-        self._static_terms(problem, before, after, F_pre)
-
-    def net_work(self, problem: Problem, before: Increment, after: Increment,
-                 F_pre: np.ndarray) -> float:
-        """Trapezoidal work of the loads less that of the stresses from `before` to `after`."""
-        probe = DropEnergy()
-        probe._static_terms(problem, before, after, F_pre, friction=False)
-        return probe.external - sum(probe.internal.values())
-
-    def _static_terms(self, problem: Problem, before: Increment | PathState, after: Increment,
-                      F_pre: np.ndarray, friction: bool = True) -> None:
-        R, du = problem.reference_load, after.u - before.u
-        self.external += float((0.5 * (before.load_factor + after.load_factor) * R + F_pre)
-                               @ du)
-        dV = problem.structure.kinematics.dV
-        s0, s1 = before.evaluation.stress, after.evaluation.stress
-        e0, e1 = before.evaluation.strain, after.evaluation.strain
-        for group in problem.structure.groups:
-            cells = group.cells
-            density = np.einsum("eqi,eqi->eq", 0.5 * (s0[cells] + s1[cells]), e1[cells] -
-                                e0[cells])
-            self.internal[group.name] = self.internal.get(group.name, 0.0) + float(
-                np.sum(density * dV[cells]))
-        if friction:
-            self.friction += float(problem.constraints.friction_work_increment())
 
 
 def drop_dynamics(problem: Problem, settings: SolverSettings, omega: float) -> Dynamics:
@@ -207,6 +154,7 @@ class _Drop:
         self.energy, self.iterations, self.steps, self.time = DropEnergy(), 0, 0, 0.0
         self.next_check = self.ramp_time
         self.settled: Increment | None = None  # the last check's equilibrium (rolled back)
+        self.seed: Seed | None = None  # the imperfection under test
 
     def held(self, time: float):
         """The held quantity's control at `time` (the ramp from where the drop began)."""
@@ -263,15 +211,21 @@ class _Drop:
         last correction within the displacement tolerance; or, every CHECK_PERIODS, a static
         Newton step from it (the held quantity fixed, at most CHECK_ITERATIONS) to a stable
         equilibrium that the last one reached too or that removes less than KINETIC_END (an
-        unstable one bounds the time steps: `_resolve_growth`). None (rolled back)
-        otherwise."""
+        unstable one bounds the time steps: `_resolve_growth`). At rest on an equilibrium the
+        determinant calls unstable, an imperfection tests it (`solve.imperfection`). None
+        (rolled back) otherwise."""
         if self.time < self.ramp_time:
             return None
+        if self.seed is not None:
+            return self._seed_outcome()
         e = self.energy
         static = self._resting()
-        if static is not None and self._stable(self.current):
-            return _ended(self.current, static, self.iterations, self.steps, self.time,
-                          self.energy, self.start)
+        if static is not None:
+            if self._stable(self.current):
+                return _ended(self.current, static, self.iterations, self.steps, self.time,
+                              self.energy, self.start)
+            self._seed_imperfection()
+            return None
         if self.time < self.next_check:
             return None
         self.next_check = self.time + CHECK_PERIODS * self.period
@@ -304,6 +258,50 @@ class _Drop:
         return _ended(inc, static, self.iterations + inc.iterations, self.steps, self.time,
                       self.energy, self.start)
 
+    def _seed_imperfection(self, seed: Seed | None = None) -> None:
+        """Seed an imperfection at the current rest (`solve.imperfection`): along its unstable
+        mode, or along `seed`'s in the other sense; the time steps resolve its growth."""
+        e, u = self.energy, self.current.u
+        work = 0.5 * abs(float((self.current.load_factor * self.problem.reference_load
+                                + self.F_pre) @ u))
+        if seed is None:
+            seed = Seed.at_rest(self.problem, self.current.evaluation, self.control.weights,
+                                self.omega, 1.0 / (SMALLEST_STEP * self.period), self.time,
+                                work, e.kinetic)
+        else:
+            seed = seed.opposite(self.omega, self.time, work, e.kinetic)
+        self.seed, v0 = seed, self.motion.v
+        self.motion = Motion(self.motion.u, v0 + seed.velocity, self.motion.a)
+        added = 0.5 * float(self.motion.v @ (self.mass * self.motion.v) - v0 @ (self.mass * v0))
+        e.external, e.seeded = e.external + added, e.seeded + added
+        if seed.rate > 0.0:
+            self._bound_growth(seed.rate)
+        log.debug("dynamic drop: at rest at t = %.4g s on a state the held determinant calls "
+                  "unstable (growth %.3g omega_1): an imperfection of %.3g N mm seeded along "
+                  "its mode (%+g)", self.time, seed.rate / self.omega, seed.energy, seed.sense)
+
+    def _seed_outcome(self) -> Increment | None:
+        """The seeded imperfection's verdict: grown (the drop goes on), died in both senses
+        (the drop ends at the rest: the motion shows it stable) or not yet (None)."""
+        seed = self.seed
+        if self.energy.kinetic > seed.grown:
+            log.debug("dynamic drop: the seeded motion grows at t = %.4g s: the rest was "
+                      "unstable", self.time)
+            self.seed = None
+            return None
+        static = self._resting() if self.time >= seed.until else None
+        if static is None:
+            return None
+        if seed.sense > 0.0:
+            self._seed_imperfection(seed)
+            return None
+        self.seed = None
+        log.info("dynamic drop: at rest on an equilibrium the held determinant calls unstable, "
+                 "which an imperfection along its unstable mode left in neither sense: a "
+                 "stable rest (docs/solver.md, item 43)")
+        return _ended(self.current, static, self.iterations, self.steps, self.time,
+                      self.energy, self.start)
+
     def _resting(self) -> float | None:
         """The static load norm of the current state where it is at rest as it stands: the
         kinetic energy below KINETIC_END of what the drop put into motion, the static
@@ -319,12 +317,13 @@ class _Drop:
         return None
 
     def unstable_rest(self) -> str:
-        """Why a drop did not end, where it is at rest on an equilibrium that is unstable with
-        the stroke held (else ''): no motion is left to leave it by."""
-        if self._resting() is None or self._stable(self.current):
+        """Why a drop did not end, where it was testing a rest the held determinant calls
+        unstable (else '')."""
+        if self.seed is None:
             return ""
-        return ("; it rests on an equilibrium within the tolerances that is unstable with the "
-                "stroke held, with no motion left to leave it by (docs/solver.md, item 42)")
+        return ("; it came to rest on an equilibrium within the tolerances that the held "
+                "determinant calls unstable, and the imperfection seeded there had neither "
+                "grown nor died (docs/solver.md, items 42-43)")
 
     def _resolve_growth(self, unstable: Increment) -> None:
         """Bound the time step by RESOLVED_GROWTH over the fastest growth rate at `unstable`."""
@@ -332,10 +331,13 @@ class _Drop:
         rate = fastest_growth(self.problem, unstable.evaluation, self.control.weights,
                               self.omega, fastest)
         if rate > 0.0:
-            self.largest = min(self.free_largest, self.scale * RESOLVED_GROWTH / rate)
-            self.dt = min(self.dt, self.largest)
-            log.debug("dynamic drop: unstable equilibrium at t = %.4g s, growth %.3g omega_1: "
-                      "time steps below %.3g s", self.time, rate / self.omega, self.largest)
+            self._bound_growth(rate)
+
+    def _bound_growth(self, rate: float) -> None:
+        self.largest = min(self.free_largest, self.scale * RESOLVED_GROWTH / rate)
+        self.dt = min(self.dt, self.largest)
+        log.debug("dynamic drop: unstable equilibrium at t = %.4g s, growth %.3g omega_1: "
+                  "time steps below %.3g s", self.time, rate / self.omega, self.largest)
 
     def _agrees(self, before: Increment | None, after: Increment) -> bool:
         """Whether two static equilibria reached from the motion are the same: the load

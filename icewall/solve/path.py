@@ -45,7 +45,7 @@ from icewall.solve.integrator import first_mode_frequency
 from icewall.solve.newton import newton_increment
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
-from icewall.solve.stability import require_stable
+from icewall.solve.stability import held_sign, require_stable
 from icewall.solve.steps import StepSizeController
 
 log = logging.getLogger(__name__)
@@ -176,6 +176,7 @@ class _Mode:
     omega: float = math.nan  # the wall's first-mode frequency (rad/s): the drops' damping
     kinked: bool = False  # after a located bracket whose end converged (Newton's failure)
     unstable: bool = False  # the last failure was an unstable state, not a Newton failure
+    held: int = 1  # the held determinant's sign at the last stable state (stability.held_sign)
 
     def located(self, current: float, load: float, settings: SolverSettings) -> bool:
         """Whether the bracket [current, ceiling] pins the limit point's load to the
@@ -315,14 +316,12 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
     steps = StepSizeController.of(settings, settings.increment)
     mode, stagnant = _Mode("displacement", steps.largest, 0.0), 0
     if resume:  # (size, release, opening?, stagnant steps, 1/dt, bracket end, slope, peak,
-        # omega_1, kinked, unstable): below
-        mode = _Mode("opening" if resume[2] else "displacement", resume[0], resume[1],
-                     resume[4] if len(resume) > 4 else FIRST_INVERSE_STEP,
-                     *(resume[5:8] if len(resume) > 7 else ()),
-                     omega=resume[8] if len(resume) > 8 else math.nan,
-                     kinked=bool(resume[9]) if len(resume) > 9 else False,
-                     unstable=bool(resume[10]) if len(resume) > 10 else False)
-        stagnant = int(resume[3])
+        # omega_1, kinked, unstable, held sign); an older checkpoint's missing tail: defaults
+        r = tuple(resume) + (FIRST_INVERSE_STEP, math.nan, math.nan, 0.0, math.nan, 0.0, 0.0,
+                             1.0)[len(resume) - 4:]
+        mode = _Mode("opening" if r[2] else "displacement", r[0], r[1], r[4], *r[5:8],
+                     omega=r[8], kinked=bool(r[9]), unstable=bool(r[10]), held=int(r[11]))
+        stagnant = int(r[3])
     path = _Path(problem, state, preload)
     last_increment = state.last_increment
     while -float(state.u[problem.control_equation]) < settings.target - 1e-12 * max(
@@ -334,6 +333,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             if mode.name == "drop" and problem.mass is not None:
                 inc = dynamic_drop(problem, settings, state, control, preload,
                                    drop_dynamics(problem, settings, mode.omega))
+                mode.held = held_sign(problem, inc.evaluation, control.weights, mode.omega)
             elif mode.name == "drop":
                 inc, mode.damping = drop_step(problem, settings, state, control, preload,
                                               mode.damping, last_increment)
@@ -341,7 +341,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                 inc = newton_increment(problem, settings, state, control, preload,
                                        last_increment=last_increment)
                 if mode.name == "displacement" and problem.mass is not None:
-                    require_stable(problem, inc, path.R, mode.omega)
+                    mode.held = require_stable(problem, inc, path.R, mode.omega, mode.held)
             if mode.name == "opening" and inc.control_displacement > settings.target * (
                     1 + 1e-12):
                 raise StepFailed("the opening step passed the target deflection", "overshoot")
@@ -368,7 +368,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
                                                   float(stagnant), mode.damping,
                                                   mode.ceiling, mode.slope, mode.peak,
                                                   mode.omega, float(mode.kinked),
-                                                  float(mode.unstable)))
+                                                  float(mode.unstable), float(mode.held)))
         state.last_increment = last_increment
         path.state = state
         yield inc, state

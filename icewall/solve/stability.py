@@ -45,6 +45,9 @@ eigenvalues omega^2 + (SLOWEST_GROWTH omega_1)^2 are negative only for a mode th
 exp(s t) with s above it (an e-folding time of 16 first periods). A mode growing slower
 creeps while the stroke moves on (with the damping, slower still); a drop waiting for it to
 leave a marginal state would not end."""
+INVERSE_ITERATIONS = 30
+"""Inverse iterations for an unstable mode (`unstable_mode`): the imperfection a drop seeds
+needs the mode's direction, not its digits."""
 
 
 def _parity(permutation: np.ndarray) -> int:
@@ -78,30 +81,41 @@ def held_rows(problem: Problem, weights: np.ndarray) -> sp.csr_matrix:
     return sp.vstack(rows, format="csr")
 
 
+def free_equations(problem: Problem, n: int) -> np.ndarray:
+    """The mask of the n equations the supports leave free (the held tangent's rows)."""
+    free = np.ones(n, dtype=bool)
+    free[problem.constraints.fixed] = False
+    return free
+
+
 def held_tangent(problem: Problem, evaluation, weights: np.ndarray
                  ) -> tuple[sp.csr_matrix, np.ndarray | None]:
     """K_t + a B^T B on the free equations, and the lumped masses there (None without)."""
-    s, c = problem.structure, problem.constraints
+    s = problem.structure
     K = s.stiffness(s.with_tangent(evaluation)).tocsr()
     scale = float(np.abs(K.diagonal()).max())
     B = held_rows(problem, weights)
     A = (K + (PENALTY * scale) * (B.T @ B)).tocsr()
-    free = np.ones(A.shape[0], dtype=bool)
-    free[c.fixed] = False
+    free = free_equations(problem, A.shape[0])
     mass = None if problem.mass is None else problem.mass[free]
     return A[free][:, free], mass
 
 
-def stable_under_stroke(problem: Problem, evaluation, weights: np.ndarray,
-                        omega: float = 0.0) -> bool:
-    """Whether the equilibrium of `evaluation` (converged, at the constraints' current pair
-    states) is stable with the stroke `weights . u` held: det(K_t + a B^T B + (SLOWEST_GROWTH
-    omega)^2 M) > 0 on the free equations (`omega`: the first mode's circular frequency, rad/s;
-    0 or without masses: det(K_t + a B^T B))."""
+def held_sign(problem: Problem, evaluation, weights: np.ndarray, omega: float = 0.0) -> int:
+    """The sign of det(K_t + a B^T B + (SLOWEST_GROWTH omega)^2 M) on the free equations at
+    the equilibrium of `evaluation` (converged, at the constraints' current pair states), the
+    stroke `weights . u` held (`omega`: the first mode's circular frequency, rad/s; 0 or
+    without masses: det(K_t + a B^T B))."""
     A, mass = held_tangent(problem, evaluation, weights)
     if mass is not None and omega > 0.0:  # N/mm: (1/s^2) (t) = N/mm
         A = A + sp.diags((SLOWEST_GROWTH * omega) ** 2 * mass)
-    return determinant_sign(A) > 0
+    return determinant_sign(A)
+
+
+def stable_under_stroke(problem: Problem, evaluation, weights: np.ndarray,
+                        omega: float = 0.0) -> bool:
+    """Whether that equilibrium is stable with the stroke held: `held_sign` positive."""
+    return held_sign(problem, evaluation, weights, omega) > 0
 
 
 def fastest_growth(problem: Problem, evaluation, weights: np.ndarray, omega: float,
@@ -124,15 +138,39 @@ def fastest_growth(problem: Problem, evaluation, weights: np.ndarray, omega: flo
     return fastest if sign <= 0 else top
 
 
+def unstable_mode(problem: Problem, evaluation, weights: np.ndarray, rate: float,
+                  iterations: int = INVERSE_ITERATIONS) -> np.ndarray:
+    """The mode of M u'' + K_t u = 0 (the stroke held) that grows at about `rate` (1/s, from
+    `fastest_growth`: the real eigenvalue -s^2 with s in [rate / 2, rate]; rate 0: the
+    eigenvalue nearest zero), by inverse iteration on (K_t + a B^T B + (3 rate / 4)^2 M)^-1 M
+    from a uniform start; M-normalised, on all equations (zero on the fixed ones)."""
+    A, mass = held_tangent(problem, evaluation, weights)
+    lu = spla.splu(sp.csc_matrix(A + sp.diags((0.75 * rate) ** 2 * mass)),
+                   permc_spec="COLAMD")
+    x = np.ones(A.shape[0])
+    for _ in range(iterations):
+        x = lu.solve(mass * x)
+        x /= math.sqrt(float(x @ (mass * x)))
+    mode = np.zeros(problem.mass.shape[0])
+    mode[free_equations(problem, mode.size)] = x
+    return mode
+
+
 def require_stable(problem: Problem, inc: Increment, reference: np.ndarray,
-                   omega: float) -> None:
-    """StepFailed ("unstable") where the converged step's equilibrium is unstable with the
-    stroke held (`stable_under_stroke`; `reference`: the jack loads, `omega`: omega_1 or NaN
-    before it is known): the test would not stay there. The step is then cut like a failed
-    one, and at the smallest step the drop is taken from the last stable state (issue 36,
-    item 3; `path._Mode.after_failure`)."""
+                   omega: float, held: int = 1) -> int:
+    """The sign of the converged step's `held_sign` (`reference`: the jack loads, `omega`:
+    omega_1 or NaN before it is known); StepFailed ("unstable") where the equilibrium has lost
+    the stability of the last stable state, whose sign was `held`: negative where that was
+    positive. The test would not stay there; the step is then cut like a failed one, and at
+    the smallest step the drop is taken from the last stable state (issue 36, item 3;
+    `path._Mode.after_failure`). `held` is negative after a drop that came to rest on a state
+    the determinant calls unstable and the motion showed stable (`solve.imperfection`): the
+    determinant of one branch of the laws, which the motion does not take. Until it turns
+    positive again, a negative determinant is that state's, and the test sees no instability
+    (one that adds a negative eigenvalue turns it positive: a parity test sees no more)."""
     weights = StrokeControl.of_load(reference).weights
-    if not stable_under_stroke(problem, inc.evaluation, weights,
-                               0.0 if math.isnan(omega) else omega):
+    sign = held_sign(problem, inc.evaluation, weights, 0.0 if math.isnan(omega) else omega)
+    if sign <= 0 and held > 0:
         raise StepFailed("the equilibrium reached is unstable with the stroke held (the held "
                          "tangent's determinant is not positive)", "unstable")
+    return 1 if sign > 0 else -1
