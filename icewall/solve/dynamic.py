@@ -106,8 +106,10 @@ def dynamic_drop(problem: Problem, settings: SolverSettings, state: PathState, c
                  preload: float, dynamics: Dynamics) -> Increment:
     """Integrate the wall's motion under `control`'s held quantity from rest at `state` until
     it comes to rest; return the equilibrium it ends at, with the drop's time steps, largest
-    kinetic energy and work terms (`Increment.path_energy`). StepFailed where a time step
-    fails at SMALLEST_STEP of the period or MAX_TIME_STEPS do not bring it to rest."""
+    kinetic energy and work terms (`Increment.path_energy`); forensics "tested_rest" where it
+    is one the held determinant calls unstable and an imperfection showed stable. StepFailed
+    where a time step fails at SMALLEST_STEP of the period or MAX_TIME_STEPS do not bring it
+    to rest."""
     drop = _Drop(problem, settings, state, control, preload, dynamics)
     while drop.steps < MAX_TIME_STEPS:
         if not drop.advance():
@@ -299,8 +301,11 @@ class _Drop:
         log.info("dynamic drop: at rest on an equilibrium the held determinant calls unstable, "
                  "which an imperfection along its unstable mode left in neither sense: a "
                  "stable rest (docs/solver.md, item 43)")
-        return _ended(self.current, static, self.iterations, self.steps, self.time,
-                      self.energy, self.start)
+        end = _ended(self.current, static, self.iterations, self.steps, self.time,
+                     self.energy, self.start)
+        if not self._stable(end):  # (the motion may have left the branch it was called on)
+            end.forensics["tested_rest"] = [1]
+        return end
 
     def _resting(self) -> float | None:
         """The static load norm of the current state where it is at rest as it stands: the

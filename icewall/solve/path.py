@@ -45,7 +45,7 @@ from icewall.solve.integrator import first_mode_frequency
 from icewall.solve.newton import newton_increment
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
-from icewall.solve.stability import held_sign, require_stable
+from icewall.solve.stability import require_stable
 from icewall.solve.steps import StepSizeController
 
 log = logging.getLogger(__name__)
@@ -176,7 +176,7 @@ class _Mode:
     omega: float = math.nan  # the wall's first-mode frequency (rad/s): the drops' damping
     kinked: bool = False  # after a located bracket whose end converged (Newton's failure)
     unstable: bool = False  # the last failure was an unstable state, not a Newton failure
-    held: int = 1  # the held determinant's sign at the last stable state (stability.held_sign)
+    held: int = 1  # the held determinant's sign at the last stable state (-1: a tested rest)
 
     def located(self, current: float, load: float, settings: SolverSettings) -> bool:
         """Whether the bracket [current, ceiling] pins the limit point's load to the
@@ -333,7 +333,7 @@ def _advance_control(problem: Problem, settings: SolverSettings, state: PathStat
             if mode.name == "drop" and problem.mass is not None:
                 inc = dynamic_drop(problem, settings, state, control, preload,
                                    drop_dynamics(problem, settings, mode.omega))
-                mode.held = held_sign(problem, inc.evaluation, control.weights, mode.omega)
+                mode.held = -1 if inc.forensics.get("tested_rest") else 1
             elif mode.name == "drop":
                 inc, mode.damping = drop_step(problem, settings, state, control, preload,
                                               mode.damping, last_increment)

@@ -100,6 +100,7 @@ def test_a_rest_the_determinant_only_calls_unstable_is_kept_once_the_imperfectio
     assert steps[-1][0].control_displacement == pytest.approx(0.15)
     drops = [inc for inc, _ in steps if inc.path_energy is not None]
     assert drops and all(inc.path_energy.seeded > 0.0 for inc in drops)
+    assert all(inc.forensics["tested_rest"] == [1] for inc in drops)
     P = np.array([inc.load_factor for inc, _ in steps])
     assert _after_drop(steps)[1] == pytest.approx(unpatched, rel=1e-3)
     # the last rest: on the plateau, or just below it where the vibration unloaded the weak
