@@ -58,6 +58,7 @@ def summarize(path: str | os.PathLike) -> dict:
         # issue 20 §1: bottom plate at the peak vs f_y, first crushing, residual mechanism
         "mechanism": mechanism_check(path) if len(h["step"]) else None,
         "equilibrium": None,  # how far the stored steps are from equilibrium (_equilibrium)
+        "energy": None,  # the energy balance at the last step (_energy_balance)
         # why the stored deck no longer loads (None: it does); what needs it is unknown
         "stored_deck_problem": deck_problem,
     }
@@ -83,7 +84,27 @@ def summarize(path: str | os.PathLike) -> dict:
             out["dynamic_drops"] = _dynamic_drops(h, defl)
         if solver != "linear":
             out["equilibrium"] = _equilibrium(h, stored)
+        if "external_work" in h and "energy_imbalance" in h:
+            out["energy"] = _energy_balance(h)
     return finite_figures(out)
+
+
+def _energy_balance(history) -> dict:
+    """The energy account at the last step (N mm): the external work, the imbalance and, in a
+    run that can take dynamic drops, the numerical dissipation of their time integration
+    (solve/energy.py), each also as a fraction of the external work (None where there is
+    none)."""
+    external = float(history["external_work"][-1])
+    imbalance = float(history["energy_imbalance"][-1])
+    numerical = (float(history["numerical_dissipation"][-1])
+                 if "numerical_dissipation" in history else None)
+
+    def fraction(value):
+        return None if value is None or external == 0.0 else value / external
+
+    return {"external_work": external, "energy_imbalance": imbalance,
+            "imbalance_fraction": fraction(imbalance), "numerical_dissipation": numerical,
+            "numerical_fraction": fraction(numerical)}
 
 
 def _dynamic_drops(history, deflection) -> dict:
@@ -200,6 +221,19 @@ def _equilibrium_text(e: dict | None, jumped: bool) -> str:
             f"{e['scheme']}; {norms}")
 
 
+def _energy_text(e: dict) -> str:
+    """One line: the external work, the imbalance and the drops' numerical dissipation."""
+    def part(name, value, fraction):
+        share = "-" if fraction is None else f"{100.0 * fraction:.3g} %"
+        return f"{name} {share} ({value:.4g} N mm)"
+
+    parts = [part("imbalance", e["energy_imbalance"], e["imbalance_fraction"])]
+    if e.get("numerical_dissipation") is not None:
+        parts.append(part("numerical dissipation of the dynamic drops",
+                          e["numerical_dissipation"], e["numerical_fraction"]))
+    return f"external work {e['external_work']:.4g} N mm; of it {', '.join(parts)}"
+
+
 def _first_maximum_text(s: dict, unit: str) -> str:
     """The first maximum, and whether the curve climbs past it later (a second hump)."""
     first = s.get("first_max_load")
@@ -241,6 +275,7 @@ def format_summary(summary: dict) -> str:
         ("steps over a stall", ", ".join(f"to {d:.4g} mm" for d in s.get("jumps") or ())
          or "none"),
         ("equilibrium", _equilibrium_text(s.get("equilibrium"), bool(s.get("jumps")))),
+        *([("energy balance", _energy_text(s["energy"]))] if s.get("energy") else []),
         ("run time", _num(s.get("run_time_s"), "s", ".1f")),
         *_ductility_rows(s.get("ductility"), lu),
         *(format_mechanism(s["mechanism"]) if s.get("mechanism") else []),

@@ -29,7 +29,8 @@ what the damping would have taken, booked as the kinetic energy left. A state wh
 unbalance meets the tolerances as it stands, with the kinetic energy below KINETIC_END of what
 the drop moved, ends it at once. Its work terms are summed over the time steps
 (`DropEnergy`), so the energy balance of the run (external = stored + dissipated + damped +
-kinetic) stays closed through it.
+kinetic + the integrator's numerical dissipation, from each time step's work identity:
+solve/energy.py) stays closed through it.
 """
 
 from __future__ import annotations
@@ -187,8 +188,9 @@ class _Drop:
         c.commit()
         self.steps, self.time = self.steps + 1, self.time + self.dt
         self.iterations += inc.iterations
-        self.energy.add(self.problem, self.current, inc, step, end, self.F_pre)
-        self.r0 = _static_unbalance(self.problem, inc, self.F_pre)
+        r1 = _static_unbalance(self.problem, inc, self.F_pre)
+        self.energy.add(self.problem, self.current, inc, step, end, self.F_pre, self.r0, r1)
+        self.r0 = r1
         self.motion, self.current = end, inc
         growth = min(2.0, max(0.5, 0.9 * max(ratio, 1e-12) ** (-1.0 / 3.0)))
         if inc.iterations > TARGET_ITERATIONS:
@@ -387,8 +389,9 @@ def _static_unbalance(problem: Problem, inc: Increment, F_pre: np.ndarray) -> np
 def _ended(inc: Increment, static: float, iterations: int, steps: int, time: float,
            energy: DropEnergy, start: PathState) -> Increment:
     log.info("dynamic drop: %d time steps (%.4g s), %d iterations, load factor %.6g -> %.6g, "
-             "largest kinetic energy %.4g N mm", steps, time, iterations, start.load_factor,
-             inc.load_factor, energy.largest_kinetic)
+             "largest kinetic energy %.4g N mm, numerical dissipation %.4g N mm", steps, time,
+             iterations, start.load_factor, inc.load_factor, energy.largest_kinetic,
+             energy.numerical)
     inc.iterations, inc.load_norm = iterations, static
     inc.forensics["time_steps"] = [steps]
     inc.forensics["drop_duration_us"] = [int(round(time * 1e6))]

@@ -1,6 +1,50 @@
 """Energy bookkeeping per step: external work = stored elastic energy + concrete cracking and
 crushing dissipation + steel plastic work + interface friction work + the dynamic drops'
-viscous damping and the kinetic energy left where they ended (+ imbalance)."""
+viscous damping, the kinetic energy left where they ended and their integrator's numerical
+dissipation (+ imbalance).
+
+A static step books trapezoidal rules: the loads' work 1/2 (P0 + P1) R . du, each group's stress
+work 1/2 (s0 + s1) : (e1 - e0) dV, the friction of the slipping pairs. A dynamic drop's time step
+(`DropEnergy.add`) books the same physical terms, and besides them what the integrator takes,
+from the step's own work identity. Its residual (solve/integrator.py), converged to e (the
+Newton unbalance, restricted to the free equations), is
+
+    (1-af) e = (1-af) r1 + af r0 - (1-am) M a1 - am M a0 - (1-af) C v1 - af C v0,
+
+r = P R + F - f_int(u) - G lam the static unbalance (applied minus resisting forces; r0 the
+one the step's history carried: zero at the drop's first step, where it starts from a static
+equilibrium). Dotted with the step's du = u1 - u0:
+
+    W_inertia + W_damping + W_static = -(1-af) e . du  (~ 0, the Newton tolerance),
+    W_inertia = [(1-am) M a1 + am M a0] . du,
+    W_damping = [(1-af) C v1 + af C v0] . du,
+    W_static  = -[(1-af) r1 + af r0] . du,
+
+each with the scheme's weights. The physical account weighs every force 1/2, 1/2 instead:
+external work E = (1/2 (P0 + P1) R + F) . du, stress work I = 1/2 (f_int0 + f_int1) . du (the
+groups' trapezoidal stress work, the same sum: eps = B u), damping D = 1/2 C (v0 + v1) . du,
+and the kinetic energy T = 1/2 v M v. With q = C v - r (the damping less the static unbalance)
+the numerical dissipation of the step is
+
+    N = (W_inertia - (T1 - T0)) + (1/2 - af) (q1 - q0) . du,
+
+the inertia's algorithmic dissipation (the scheme's inertia work less the change of kinetic
+energy) plus the difference between the af-weighted and the trapezoidal work of the other
+forces. Then, exactly,
+
+    E = I + Fr + D + (T1 - T0) + N + [(1-af) e . du + (1/2 G (lam0 + lam1) . du - Fr)],
+
+the bracket being the imbalance the step leaves: the equilibrium tolerance times du and the
+gap forces' trapezoidal work against the friction booked (Fr, interface.gap's estimate over
+the pairs slipping at the step's end; the two differ where pairs open, close, stick or slip
+within the step); at the drop's first step also 1/2 r0 . du of the start's own unbalance
+(within the tolerance), which the step took as zero. The stress work stays the trapezoidal
+estimate of the integral of sigma : d eps (the concrete's dissipation is that less its
+stored secant energy); N is the integrator's, not the wall's.
+With af = am = 1/2 (rho_inf = 1: the trapezoidal rule, gamma = 1/2, beta = 1/4) du = dt (v0 +
+v1) / 2 and v1 - v0 = dt (a0 + a1) / 2, so W_inertia = T1 - T0 and N = 0 to round-off; below
+it the high modes lose energy on purpose (tests/solve/test_drop_energy.py).
+"""
 
 from __future__ import annotations
 
@@ -25,6 +69,7 @@ class EnergyAccount:
     elastic_energy: dict[str, float] = field(default_factory=dict)
     damping_work: float = 0.0  # viscous damping of the dynamic drops
     kinetic_lost: float = 0.0  # what the vibration held where a drop ended (solve.dynamic)
+    numerical_dissipation: float = 0.0  # the drops' integrator's (DropEnergy.numerical)
     dynamic: bool = False  # the run can take dynamic drops: record their columns
 
     def add_drop(self, drop) -> None:
@@ -36,6 +81,7 @@ class EnergyAccount:
         self.friction_work += drop.friction
         self.damping_work += drop.damping
         self.kinetic_lost += drop.kinetic
+        self.numerical_dissipation += drop.numerical
 
     def add_external(self, load_old: np.ndarray, load_new: np.ndarray, du: np.ndarray) -> None:
         """Trapezoidal work of the applied loads over a converged increment."""
@@ -59,12 +105,13 @@ class EnergyAccount:
             "concrete", 0.0)
         steel = self.internal_work.get("steel", 0.0) - self.elastic_energy.get("steel", 0.0)
         imbalance = (self.external_work - work - self.friction_work - self.damping_work
-                     - self.kinetic_lost)
+                     - self.kinetic_lost - self.numerical_dissipation)
         out = {"external_work": self.external_work, "elastic_energy": stored,
                "concrete_dissipation": concrete, "plastic_work": steel,
                "friction_work": self.friction_work, "energy_imbalance": imbalance}
         if self.dynamic:
-            out.update(damping_work=self.damping_work, kinetic_energy_lost=self.kinetic_lost)
+            out.update(damping_work=self.damping_work, kinetic_energy_lost=self.kinetic_lost,
+                       numerical_dissipation=self.numerical_dissipation)
         return out
 
 
@@ -76,7 +123,10 @@ def secant_elastic_energy(stress: np.ndarray, strain: np.ndarray, dV: np.ndarray
 
 @dataclass
 class DropEnergy:
-    """Work terms of one drop summed over its time steps (N mm)."""
+    """Work terms of one drop summed over its time steps (N mm): the physical ones, the
+    integrator's numerical dissipation (`numerical`, the module's N) and, as a check that is no
+    part of the account, the work of the Newton unbalance the time steps converged to
+    (`unbalance`, the module's (1-af) e . du)."""
 
     external: float = 0.0
     internal: dict[str, float] = field(default_factory=dict)
@@ -85,17 +135,32 @@ class DropEnergy:
     kinetic: float = 0.0  # at the end
     largest_kinetic: float = 0.0
     seeded: float = 0.0  # the kinetic energy of the imperfections seeded (counted external)
+    numerical: float = 0.0  # the integrator's algorithmic dissipation
+    unbalance: float = 0.0  # the converged residual's work (imbalance, not in the account)
 
     def add(self, problem: Problem, before: Increment | PathState, after: Increment,
-            step: TimeStep, motion: Motion, F_pre: np.ndarray) -> None:
+            step: TimeStep, motion: Motion, F_pre: np.ndarray, unbalance_before: np.ndarray,
+            unbalance_after: np.ndarray) -> None:
         """A committed time step: the trapezoidal work of the loads, the stresses and the
-        damping, the friction work and the kinetic energy at its end."""
+        damping, the friction work and the kinetic energy at its end; and from the step's
+        work identity (module docstring) the integrator's numerical dissipation.
+        `unbalance_before`, `unbalance_after`: the static unbalances r0 (the one the step's
+        history carried) and r1 (at its converged state), equation space."""
         self._static_terms(problem, before, after, F_pre)
-        v_mean = 0.5 * (step.start.v + motion.v)
-        self.damping += float(problem.constraints.restrict(step.damping * v_mean)
-                              @ (after.u - before.u))
+        du = after.u - before.u
+        start, s = step.start, step.scheme
+        v_mean = 0.5 * (start.v + motion.v)
+        self.damping += float(problem.constraints.restrict(step.damping * v_mean) @ du)
+        kinetic_before = 0.5 * float(start.v @ (step.mass * start.v))
         self.kinetic = 0.5 * float(motion.v @ (step.mass * motion.v))
         self.largest_kinetic = max(self.largest_kinetic, self.kinetic)
+        inertia = float(step.mass * ((1.0 - s.alpha_m) * motion.a + s.alpha_m * start.a) @ du)
+        q0 = step.damping * start.v - unbalance_before
+        q1 = step.damping * motion.v - unbalance_after
+        self.numerical += (inertia - (self.kinetic - kinetic_before)
+                           + (0.5 - s.alpha_f) * float((q1 - q0) @ du))
+        scheme_weighted = (1.0 - s.alpha_f) * q1 + s.alpha_f * q0  # damping less the static
+        self.unbalance -= inertia + float(scheme_weighted @ du)
 
     def close(self, problem: Problem, before: Increment, after: Increment,
               F_pre: np.ndarray) -> None:

@@ -127,7 +127,8 @@ def take_checkpoint(path: PathState, constraints, energy: EnergyAccount
         "energy/external_work": energy.external_work,
         "energy/friction_work": energy.friction_work,
         "energy/damping_work": energy.damping_work,
-        "energy/kinetic_lost": energy.kinetic_lost}
+        "energy/kinetic_lost": energy.kinetic_lost,
+        "energy/numerical_dissipation": energy.numerical_dissipation}
     for kind in ("internal_work", "elastic_energy"):
         for name, value in getattr(energy, kind).items():
             out[f"energy/{kind}/{name}"] = value
@@ -169,6 +170,7 @@ def restore_checkpoint(data: dict[str, np.ndarray], structure: Structure, constr
         energy.friction_work = float(data["energy/friction_work"])
         energy.damping_work = float(data.get("energy/damping_work", 0.0))
         energy.kinetic_lost = float(data.get("energy/kinetic_lost", 0.0))
+        energy.numerical_dissipation = float(data.get("energy/numerical_dissipation", 0.0))
         for name, value in data.items():
             kind, _, group = name.removeprefix("energy/").partition("/")
             if name.startswith("energy/") and group:

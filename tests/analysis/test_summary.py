@@ -164,3 +164,36 @@ def test_summary_gives_the_first_maximum_and_says_when_the_curve_climbs_past_it(
     one = result("one.h5", [3.0, 6.25, 5.0])
     assert one["first_max_load"] == one["max_load"] == 6.25
     assert "first maximum          : 6.25 MPa at 2 mm\n" in format_summary(one)
+
+
+def test_summary_gives_the_energy_balance_and_the_drops_numerical_dissipation(tmp_path):
+    """The energy account at the last step: the imbalance as a fraction of the external work
+    and, in a run that can take dynamic drops, beside it the numerical dissipation of their time
+    integration (solve/energy.py); a file without the energy columns has no such line."""
+    def result(name, scalars):
+        path = tmp_path / name
+        w = ResultWriter(path, deck_text="", deck_path="cf4.yaml", mesh=one_cell_mesh(),
+                         attrs={"specimen": "CF-4", "load_measure": "w", "load_unit": "MPa"})
+        for i, step in enumerate(scalars):
+            w.write_step(StepRecord(i + 1, 1.0 + i, 2.0, 1.0, 5, 1e-5, 1e-5, 0.1,
+                                    scalars=step))
+        w.finish("completed", "")
+        return summarize(path)
+
+    static = result("static.h5", [{"external_work": 1.0e3, "energy_imbalance": 1.0},
+                                  {"external_work": 4.0e6, "energy_imbalance": -2.0e3}])
+    assert static["energy"] == {"external_work": 4.0e6, "energy_imbalance": -2.0e3,
+                                "imbalance_fraction": -5e-4, "numerical_dissipation": None,
+                                "numerical_fraction": None}
+    assert ("energy balance         : external work 4e+06 N mm; of it imbalance -0.05 % "
+            "(-2000 N mm)\n") in format_summary(static) + "\n"
+    dynamic = result("dynamic.h5", [{"external_work": 8.0e6, "energy_imbalance": 4.0e3,
+                                     "numerical_dissipation": 1.2e5}])
+    assert dynamic["energy"]["numerical_fraction"] == pytest.approx(0.015)
+    assert ("energy balance         : external work 8e+06 N mm; of it imbalance 0.05 % "
+            "(4000 N mm), numerical dissipation of the dynamic drops 1.5 % (1.2e+05 N mm)"
+            ) in format_summary(dynamic)
+    assert json.loads(json.dumps(dynamic)) == dynamic
+    curve_file(tmp_path / "none.h5")
+    none = summarize(tmp_path / "none.h5")
+    assert none["energy"] is None and "energy balance" not in format_summary(none)

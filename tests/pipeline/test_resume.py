@@ -128,6 +128,29 @@ def test_newton_resume_ends_bit_identical(tmp_path):
     assert_identical(whole.path, run_deck(loaded, out, resume=True).path)
 
 
+DYNAMIC = ["analysis.element_size=150", "analysis.scheme=newton", "analysis.drops=dynamic",
+           "materials.concrete.mode_rule_band=0.1", "materials.concrete.post_peak_strength=peak",
+           "materials.concrete.fallen_strength=scaled", "loads.control.target=1.5", FIELDS]
+
+
+def test_resume_after_a_dynamic_drop_ends_bit_identical(tmp_path):
+    """The drops' energy terms are in the checkpoint: a coarse CF-4 with dynamic drops (one at
+    1.37 mm, 110 time steps), resumed right after its first drop, ends on the same bits, its
+    numerical dissipation (solve/energy.py) included."""
+    loaded = load_deck(DECKS / "cf4.yaml", DYNAMIC)
+    whole = run_deck(loaded, tmp_path / "whole" / "cf4.h5")
+    assert whole.status == "completed"
+    with open_result(whole.path) as res:
+        drops = np.flatnonzero(res.history["dynamic_time_steps"] > 0)
+        assert drops.size and drops[0] + 1 < len(res.history["step"])
+        numerical = res.history["numerical_dissipation"]
+        assert numerical[drops[0]] > 0.0 and numerical[drops[0] - 1] == 0.0
+    out = tmp_path / "cut" / "cf4.h5"
+    with pytest.raises(Interrupted):
+        run_deck(loaded, out, progress=_interrupt_after(int(drops[0]) + 1))
+    assert_identical(whole.path, run_deck(loaded, out, resume=True).path)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("k", [2, 5, 6])  # in the preload stage, at its end, after it
 def test_resume_through_the_preload_stage(tmp_path, k):
