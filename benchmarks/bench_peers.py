@@ -53,9 +53,10 @@ def our_iterations(mesh_path: Path, iterations: int, backends: tuple[str, ...]) 
     from icewall.mesh.mesh import CONCRETE, Mesh, Region
     from icewall.model.build import Model
     from icewall.model.description import ModelDescription
-    from icewall.solve.control import PathState, follow_path
+    from icewall.solve.control import follow_path
     from icewall.solve.problem import build_problem
     from icewall.solve.settings import solver_settings
+    from icewall.solve.state import PathState
 
     with np.load(mesh_path) as z:
         nodes, cells, length, height = z["nodes"], z["elems"], float(z["L"]), float(z["H"])

@@ -23,10 +23,10 @@ from icewall.deck.load import load_deck
 from icewall.interface.augmented import active_rows
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
-from icewall.solve.control import PathState
 from icewall.solve.path import follow_path
 from icewall.solve.problem import Problem, build_problem
 from icewall.solve.settings import SolverSettings, solver_settings
+from icewall.solve.state import PathState
 
 NEWTON = ("analysis.scheme=newton", "outputs.fields=[]", "materials.concrete.mode_rule_band=0.1",
           "materials.concrete.post_peak_strength=peak")  # as docs/solver.md items 22-30

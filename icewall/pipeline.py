@@ -114,6 +114,7 @@ class ResumePoint:
     checkpoint: dict[str, np.ndarray] | None
     n_steps: int
     wall_time: float
+    file: str = ""  # the checkpoint's file
 
 
 def resume_point(loaded: LoadedDeck, path: Path) -> ResumePoint:
@@ -143,7 +144,8 @@ def resume_point(loaded: LoadedDeck, path: Path) -> ResumePoint:
     if n_steps > n_stored:
         raise ResultError(f"cannot resume {partial}: its checkpoint {ckpt_file} is of step "
                           f"{n_steps}, the file holds {n_stored} steps")
-    return ResumePoint(checkpoint, n_steps, float(wall[n_steps - 1]) if n_steps else 0.0)
+    return ResumePoint(checkpoint, n_steps, float(wall[n_steps - 1]) if n_steps else 0.0,
+                       ckpt_file)
 
 
 def run_deck(loaded: LoadedDeck, output: str | Path | None = None,
@@ -278,7 +280,8 @@ def _write_nonlinear(model, writer: ResultWriter, fields: set[str], say, timings
     status, reason = "completed", ""
     probe = MechanismProbe(model.mesh, deck.analysis.gauss)  # issue 20 §1, history columns
     try:
-        steps = run_nonlinear(model, restart.checkpoint if restart else None)
+        steps = (run_nonlinear(model, restart.checkpoint, restart.file) if restart
+                 else run_nonlinear(model))
         for n_steps, report in enumerate(steps, start=first + 1):
             tic = time.perf_counter()
             inc, ev = report.increment, report.increment.evaluation

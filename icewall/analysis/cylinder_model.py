@@ -33,9 +33,10 @@ from icewall.mesh.mesh import CONCRETE, Mesh
 from icewall.mesh.structured import rectangle_mesh
 from icewall.model.build import Model
 from icewall.model.description import ModelDescription
-from icewall.solve.control import PathState, follow_path
+from icewall.solve.control import follow_path
 from icewall.solve.problem import Problem, build_problem
 from icewall.solve.settings import solver_settings
+from icewall.solve.state import PathState
 
 DIAMETER = 150.0  # mm, standard cylinder (specimens.md; the thesis gives no size)
 HEIGHT = 300.0  # mm

@@ -14,7 +14,7 @@ import logging
 import math
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -23,6 +23,14 @@ from icewall.errors import ConvergenceError
 from icewall.model.structure import Evaluation
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
+from icewall.solve.state import (
+    Increment,
+    PathState,
+    SecantCursor,
+    StepFailed,
+    external_force_norm,
+    next_state,
+)
 
 # a load fall above this fraction of the largest load in one increment is suspect (a distant
 # equilibrium past a snap-back): halved, and at the smallest step a stop ("snap-back")
@@ -31,55 +39,6 @@ MIN_RELAXATION = 0.125
 MAX_RELAXATION = 1.0
 CYCLE_RISES = 3  # rises of the load norm in an increment before the growth limit halves
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class PathState:
-    """Committed solution: displacements, load factor (jack load P, N), material states."""
-
-    u: np.ndarray
-    load_factor: float
-    states: tuple[Any, ...]
-    evaluation: Evaluation | None = None
-    preload_factor: float = 0.0  # fraction of the in-plane preload applied
-    load_scale: float = 0.0  # largest external-load norm reached: the eq. 4.5 reference
-    # (stage, position reached, next step size, peak load factor, jumps made): where _advance
-    # would go on from here (the Newton path keeps its own numbers: path.py); the checkpoint
-    # holds it whole, and follow_path(..., resume=True) continues an interrupted run from it
-    resume: tuple = ()
-    # the displacements of the increment that led here (the Newton predictor's direction)
-    last_increment: np.ndarray | None = None
-
-
-@dataclass
-class Increment:
-    """A converged increment as the writer and the reporting need it."""
-
-    kind: str  # "preload" | "control"
-    control_displacement: float
-    load_factor: float
-    preload_factor: float
-    iterations: int
-    displacement_norm: float
-    load_norm: float
-    evaluation: Evaluation
-    u: np.ndarray
-    forensics: dict[str, list[int]] = field(default_factory=dict)
-    cuts: int = 0
-    wall_time: float = 0.0
-    snap_back: bool = False  # the load dropped in a jump displacement control cannot follow
-    jumped: bool = False  # a step over a stall (settings.max_jumps, jump_increments)
-    # a dynamic drop's work terms summed over its time steps (solve.energy.DropEnergy): the
-    # energy account takes them instead of one trapezoid from the drop's start to its end
-    path_energy: Any = None
-
-
-class StepFailed(Exception):
-    """An increment did not converge (reason in .reason); the caller may cut the step."""
-
-    def __init__(self, message: str, reason: str) -> None:
-        super().__init__(message)
-        self.reason = reason
 
 
 def _norm(x: np.ndarray) -> float:
@@ -142,12 +101,6 @@ def _growth_limit(max_relaxation: float, rises: int) -> float:
     return max(MIN_RELAXATION, max_relaxation * 0.5 ** (rises // CYCLE_RISES))
 
 
-def _external_force_norm(constraints, applied: np.ndarray, internal: np.ndarray) -> float:
-    """|| applied loads on the free equations, reactions on the supported ones ||."""
-    reactions = internal[constraints.fixed]
-    return float(np.sqrt(_norm(applied) ** 2 + reactions @ reactions))
-
-
 def _residual(c: Any, load_scale: float, ev: Evaluation, external: np.ndarray
               ) -> tuple[np.ndarray, float]:
     """F_ext - F_int on the equations of `c` (no gap forces) and the eq. 4.5 load norm of the
@@ -157,7 +110,7 @@ def _residual(c: Any, load_scale: float, ev: Evaluation, external: np.ndarray
     # eq. 4.5. The reference R is the external force system: applied loads and support
     # reactions (the load reaches the supports through the structure), and never less than
     # the largest reached, so the norm stays meaningful far down the descending branch.
-    scale = max(_external_force_norm(c, external, ev.internal_force), load_scale, 1e-30)
+    scale = max(external_force_norm(c, external, ev.internal_force), load_scale, 1e-30)
     return structural, _norm(unbalance) / scale
 
 
@@ -288,7 +241,7 @@ def _after_failure(exc: StepFailed | ConvergenceError, settings: SolverSettings,
 
 
 def _advance(problem: Problem, settings: SolverSettings, state: PathState, target, preload,
-             step_size: float, kind: str, resume: tuple = ()
+             step_size: float, kind: str, resume: SecantCursor | None = None
              ) -> Iterator[tuple[Increment, PathState]]:
     """Reach `target` (deflection or preload fraction) from `state`, halving failed steps."""
     c = problem.constraints
@@ -297,9 +250,9 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
                else state.preload_factor)
     attempt = _Attempt(step_size)
     peak_load = state.load_factor
-    if resume:  # the checkpoint holds the counter too: a resumed run makes no extra jumps
-        current, peak_load = resume[0], resume[2]
-        attempt = _Attempt(resume[1], jumps=int(resume[3]))
+    if resume is not None:  # the checkpoint holds the jumps: a resumed run makes no more
+        current, peak_load = resume.position, resume.peak
+        attempt = _Attempt(resume.size, jumps=resume.jumps)
     while current < target - 1e-12 * max(1.0, abs(target)):
         goal = min(current + attempt.size, target)
         tic = time.perf_counter()
@@ -335,16 +288,11 @@ def _advance(problem: Problem, settings: SolverSettings, state: PathState, targe
         peak_load = max(peak_load, inc.load_factor)
         inc.cuts = round(math.log2(step_size / attempt.size))
         inc.wall_time = time.perf_counter() - tic
-        applied = c.restrict(inc.load_factor * problem.reference_load + (
-            0.0 if problem.preload is None else inc.preload_factor * problem.preload))
-        scale = max(state.load_scale, _external_force_norm(c, applied,
-                                                           inc.evaluation.internal_force))
         current = goal
         # grow back after a successful cut step; the deck's scheme again, no jump under way
         attempt = _Attempt(min(step_size, 2.0 * attempt.size), jumps=attempt.jumps)
-        state = PathState(inc.u, inc.load_factor, inc.evaluation.states, inc.evaluation,
-                          inc.preload_factor, scale,
-                          (kind, current, attempt.size, peak_load, attempt.jumps))
+        state = next_state(problem, state, inc,
+                           SecantCursor(kind, current, attempt.size, peak_load, attempt.jumps))
         yield inc, state
 
 
@@ -387,14 +335,15 @@ def _abrupt_drop(state: PathState, inc: Increment, peak_load: float) -> bool:
 def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,
                 resume: bool = False) -> Iterator[tuple[Increment, PathState]]:
     """Preload by load control (if any), then displacement control to the target; `resume`
-    goes on from where `initial.resume` says (an interrupted run's last converged step)."""
+    goes on from where `initial.cursor` says (an interrupted run's last converged step)."""
     current = initial
-    stage, start = (initial.resume[0], initial.resume[1:]) if resume else ("", ())
+    cursor = initial.cursor if resume else None
+    stage = "" if cursor is None else cursor.stage
     if problem.preload is not None and stage != "control":
         for inc, current in _advance(problem, settings, initial, 1.0, None,
-                                     1.0 / settings.preload_increments, "preload", start):
+                                     1.0 / settings.preload_increments, "preload", cursor):
             yield inc, current
-        start = ()
+        cursor = None
     preload = 1.0 if problem.preload is not None else 0.0
     yield from _advance(problem, settings, current, settings.target, preload,
-                        settings.increment, "control", start)
+                        settings.increment, "control", cursor)

@@ -33,10 +33,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from icewall.errors import ConvergenceError
-from icewall.solve.control import Increment, PathState, StepFailed
 from icewall.solve.newton import newton_increment, static_load_norm
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
+from icewall.solve.state import Increment, PathState, StepFailed
 
 log = logging.getLogger(__name__)
 

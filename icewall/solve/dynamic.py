@@ -1,6 +1,6 @@
 """The load drop at a held stroke, integrated in time with the wall's own mass.
 
-Where the static path under the held quantity has a limit point (`path._Mode.located`:
+Where the static path under the held quantity has a limit point (`mode.Mode.located`:
 displacement control fails beyond a located limit), a stroke-controlled test holds its stroke
 while the wall's resistance falls, and the wall moves, with its own mass, to the state it comes
 to rest in; the load cell records the vertical drop of the stroke curve. Inertia selects that
@@ -42,7 +42,6 @@ from dataclasses import replace
 import numpy as np
 
 from icewall.errors import ConvergenceError
-from icewall.solve.control import Increment, PathState, StepFailed
 from icewall.solve.energy import DropEnergy
 from icewall.solve.imperfection import Seed
 from icewall.solve.integrator import Dynamics, GeneralizedAlpha, Motion, TimeStep, ramp
@@ -50,6 +49,7 @@ from icewall.solve.newton import newton_increment, static_load_norm
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
 from icewall.solve.stability import fastest_growth, stable_under_stroke
+from icewall.solve.state import Increment, PathState, StepFailed
 
 log = logging.getLogger(__name__)
 

@@ -54,9 +54,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from icewall.solve.control import Increment, PathState
     from icewall.solve.integrator import Motion, TimeStep
     from icewall.solve.problem import Problem
+    from icewall.solve.state import Increment, PathState
 
 
 @dataclass

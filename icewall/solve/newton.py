@@ -23,10 +23,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from icewall.errors import ConvergenceError
-from icewall.solve.control import Increment, PathState, StepFailed, _external_force_norm
 from icewall.solve.controls import LoadControl
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
+from icewall.solve.state import Increment, PathState, StepFailed, external_force_norm
 
 if TYPE_CHECKING:
     from icewall.solve.drop import Dampers
@@ -85,7 +85,7 @@ def _evaluate(problem: Problem, start: PathState, u: np.ndarray, P: float,
         structural = structural - c.restrict(dampers.force(u))
     gap_force = c.restrict(c.constraint_force()) if lam_force is None else lam_force
     unbalance = structural - gap_force
-    scale = max(_external_force_norm(c, external, ev.internal_force), start.load_scale, 1e-30)
+    scale = max(external_force_norm(c, external, ev.internal_force), start.load_scale, 1e-30)
     return Iterate(u, P, ev, structural, unbalance, scale)
 
 
@@ -340,6 +340,6 @@ def static_load_norm(problem: Problem, inc: Increment, load_scale: float) -> flo
     applied = c.restrict(inc.load_factor * problem.reference_load + (
         0.0 if problem.preload is None else inc.preload_factor * problem.preload))
     unbalance = c.restrict(applied - inc.evaluation.internal_force - c.constraint_force())
-    scale = max(_external_force_norm(c, applied, inc.evaluation.internal_force), load_scale,
+    scale = max(external_force_norm(c, applied, inc.evaluation.internal_force), load_scale,
                 1e-30)
     return _norm(unbalance) / scale

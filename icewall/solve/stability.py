@@ -5,7 +5,7 @@ equilibrium is stable, and elsewhere it moves, with its own mass, to one that is
 Newton iteration converges to unstable equilibria as readily as to stable ones (on CF-4 it
 climbs past its first maximum along states whose held tangent has a negative eigenvalue:
 docs/solver.md, item 38), so the path following asks this after every static step and takes
-the drop where the answer is no (`path._Mode`; issue 36's rule: a drop begins where "the held
+the drop where the answer is no (`mode.Mode`; issue 36's rule: a drop begins where "the held
 tangent loses positive definiteness").
 
 The test is the divergence criterion of M u'' + K_t u = 0 on the held subspace: K_t the
@@ -32,9 +32,9 @@ import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 
 from icewall.interface.augmented import active_rows
-from icewall.solve.control import Increment, StepFailed
 from icewall.solve.controls import StrokeControl
 from icewall.solve.problem import Problem
+from icewall.solve.state import Increment, StepFailed
 
 PENALTY = 1e4
 """The penalty on the held rows, as a multiple of the largest diagonal of the tangent."""
@@ -163,7 +163,7 @@ def require_stable(problem: Problem, inc: Increment, reference: np.ndarray,
     the stability of the last stable state, whose sign was `held`: negative where that was
     positive. The test would not stay there; the step is then cut like a failed one, and at
     the smallest step the drop is taken from the last stable state (issue 36, item 3;
-    `path._Mode.after_failure`). `held` is negative after a drop that came to rest on a state
+    `mode.Mode.after_failure`). `held` is negative after a drop that came to rest on a state
     the determinant calls unstable and the motion showed stable (`solve.imperfection`): the
     determinant of one branch of the laws, which the motion does not take. Until it turns
     positive again, a negative determinant is that state's, and the test sees no instability

@@ -151,6 +151,39 @@ def test_resume_after_a_dynamic_drop_ends_bit_identical(tmp_path):
     assert_identical(whole.path, run_deck(loaded, out, resume=True).path)
 
 
+def test_resume_of_a_run_interrupted_inside_a_dynamic_drop_ends_bit_identical(
+        tmp_path, monkeypatch):
+    """A drop is one step of the result (its time steps are its path, not results), so the
+    checkpoint before it is the last one an interruption inside it leaves: SIGINT at the
+    drop's 40th time step (of 110), and the resumed run takes the whole drop again from the
+    step before it and ends on the same bits as the uninterrupted run."""
+    from icewall.solve import dynamic
+
+    loaded = load_deck(DECKS / "cf4.yaml", DYNAMIC)
+    whole = run_deck(loaded, tmp_path / "whole" / "cf4.h5")
+    with open_result(whole.path) as res:
+        drop = int(np.flatnonzero(res.history["dynamic_time_steps"] > 0)[0])
+        assert res.history["dynamic_time_steps"][drop] > 40
+    real = dynamic._Drop.advance
+
+    def interrupted(self):
+        if self.steps == 40:
+            raise Interrupted("SIGINT", 130)
+        return real(self)
+
+    monkeypatch.setattr(dynamic._Drop, "advance", interrupted)
+    out = tmp_path / "cut" / "cf4.h5"
+    with pytest.raises(Interrupted):
+        run_deck(loaded, out)
+    monkeypatch.undo()
+    with open_result(str(out) + ".partial") as res:
+        assert len(res.history["step"]) == drop  # every step before the drop, not the drop
+    resumed = run_deck(loaded, out, resume=True)
+    assert_identical(whole.path, resumed.path)
+    with open_result(resumed.path) as res:
+        assert res.attrs["resumed_at"] == [drop]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("k", [2, 5, 6])  # in the preload stage, at its end, after it
 def test_resume_through_the_preload_stage(tmp_path, k):

@@ -15,9 +15,9 @@ from icewall.mesh.structured import rectangle_mesh
 from icewall.model.materials import MaterialGroup
 from icewall.model.structure import Structure
 from icewall.solve.constraints import SupportConstraints
-from icewall.solve.control import PathState
 from icewall.solve.problem import Problem
 from icewall.solve.settings import SolverSettings
+from icewall.solve.state import PathState
 
 
 @dataclass(frozen=True)

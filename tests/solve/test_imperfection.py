@@ -127,7 +127,7 @@ def test_a_negative_determinant_is_an_instability_only_after_a_positive_one():
     # the static path's test: a step that turns the determinant negative from a stable state
     # fails as unstable; after a rest the motion showed stable with a negative one, a negative
     # determinant is that rest's branch (accepted), and a positive one resets the reference
-    from icewall.solve.control import StepFailed
+    from icewall.solve.state import StepFailed
 
     problem, _, inc, omega, stroke = _descending_state()
     R = problem.constraints.restrict(problem.reference_load)

@@ -198,7 +198,7 @@ def test_a_path_that_no_longer_moves_stops_with_a_reason(monkeypatch):
     tolerance at once, over and over) end the run with reason "stagnation" instead of
     looping."""
     import icewall.solve.path as path_module
-    from icewall.solve.control import Increment
+    from icewall.solve.state import Increment
 
     problem, initial = newton_bar(100.0, 4)
 
@@ -373,9 +373,9 @@ def test_a_cycling_newton_iteration_fails_once_its_norms_stall(monkeypatch):
     """Iterates that go back and forth without their norms falling (a Newton iteration
     cycling among the branches of kinked laws) fail after STALL_ITERATIONS, not at the deck's
     iteration limit; the step is then cut as after any failure."""
-    from icewall.solve.control import StepFailed
     from icewall.solve.controls import DisplacementControl
     from icewall.solve.newton import STALL_ITERATIONS, newton_increment
+    from icewall.solve.state import StepFailed
 
     problem, initial = newton_bar(100.0, 5, strength=1e9)
     first = []
