@@ -174,6 +174,18 @@ class Concrete:
         "direction in tension) leaves its secant line where it meets the envelope on its ray, "
         "the one it then follows (under envelope: where it meets the uniaxial envelope, and "
         "the stress jumps onto the ray's)", choices=("envelope", "scaled"))
+    rotating_axes: str = option(
+        "nearest", doc="the rotating axes of orthotropy (3.2.2: they follow the principal "
+        "strain axes, stress and strain co-axial): nearest = of the two labellings of the new "
+        "axes the one nearest the committed axes keeps directions 1 and 2 and their damage "
+        "(where the axes turn by 45 degrees within an increment the labelling swaps and the "
+        "stress jumps; where the in-plane strain is nearly isotropic the stress of a point "
+        "damaged in one direction turns with axes the strain hardly defines, a shear stiffness "
+        "(s1 - s2) / (2 (e1 - e2)) without bound); continuous = direction 1 on the major "
+        "principal strain (the crack normal to it) and that shear stiffness bounded by the "
+        "virgin G0 = E0 / (2 (1 + nu0)), the principal stresses drawn together, their mean "
+        "kept: the stress is a continuous function of the strain",
+        choices=("nearest", "continuous"))
     trial_stress: str = option(
         "corotational", doc="trial stress of Fig. 3.12 step 3: corotational = committed "
         "principal stresses carried with the rotating axes plus C dEps between the committed "

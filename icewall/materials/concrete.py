@@ -4,7 +4,9 @@
 secant moduli and a trial state, and never touches `committed`. One call is one pass of
 Fig. 3.12 from the committed state to the given total strain:
 
-1-2. beta of the new principal strains; committed stress and the strain increment in those axes.
+1-2. beta of the new principal strains (`rotating_axes`: the labelling nearest the committed
+     axes, or direction 1 on the major strain); committed stress and the strain increment in
+     those axes.
 3.   Trial stress sigma_lt = sigma_l + C_l(E, nu) d eps_l, with C_l rebuilt from the stored E, nu
      in the new axes (errata §3, instead of rotating the old C_g). `trial_stress`:
      "incremental" rotates the committed stress into the new axes (as printed); "corotational"
@@ -22,7 +24,9 @@ Fig. 3.12 from the committed state to the given total strain:
      its peak on the other sign's branch (a closing crack, a crushed direction in tension)
      loads where its secant line meets the new envelope, so its stress stays continuous.
      The local shear stress is reset to zero (§3.2.6), G12 from eq. 3.21.
-7-8. Secant C_l from the new E, nu, G12, back to global axes (errata 1.3).
+7-8. Secant C_l from the new E, nu, G12, back to global axes (errata 1.3). Under
+     `rotating_axes: continuous` the returned stress takes out the cone of the rotating
+     axes at an isotropic in-plane strain (rotation.py); the trial state keeps the law's.
 
 Secant relation: per direction sigma_i = E_i eps_iu (except below the secant floor); in global
 components sigma = C_g eps holds exactly only while nu and the ratios E_i/E_j stay fixed between the
@@ -32,7 +36,6 @@ iteration (secant) matrix. `concrete_tangent` gives the algorithmic tangent by d
 
 from __future__ import annotations
 
-from dataclasses import fields, is_dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -62,6 +65,8 @@ from icewall.materials.orthotropic import (
     orthotropic_normal_stiffness,
     principal_strain_angle,
 )
+from icewall.materials.parameters import take_parameters
+from icewall.materials.rotation import continuous_axes, resolved_stress
 from icewall.materials.uniaxial import SECANT_FLOOR, compression_envelope, tension_envelope
 
 LOADING_TOLERANCE = 1e-10
@@ -155,7 +160,8 @@ def past_peak(eps_u: np.ndarray, cracked: np.ndarray, crushed: np.ndarray,
 
 
 def _strain_and_axes(strain: np.ndarray, state: ConcreteState, formulation: str,
-                     frozen_column: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+                     frozen_column: np.ndarray | None, rotating_axes: str = "nearest"
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """Steps 1-2: the total strain (n, 4) (zz imposed or, in plane stress, the committed one
     until step 3 solves it) and the angle beta (n,) of its principal axes."""
     strain = np.array(strain, dtype=float, copy=True).reshape(-1, 4)
@@ -163,7 +169,7 @@ def _strain_and_axes(strain: np.ndarray, state: ConcreteState, formulation: str,
         strain[:, 2] = 0.0
     elif formulation == "plane_stress":
         strain[:, 2] = state.strain[:, 2]
-    angle = principal_strain_angle(strain, state.angle)
+    angle = principal_strain_angle(strain, state.angle, rotating_axes)
     if frozen_column is not None:
         # a frozen point keeps its axes for the rest of the increment (a fixed crack with shear
         # retention, below): near a 45-degree rotation the nearest labelling of the principal
@@ -277,7 +283,8 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
     check_formulation(formulation)
     plane_stress = formulation == "plane_stress"
     frozen_column = None if frozen is None else np.asarray(frozen, dtype=bool)[:, None]
-    strain, angle = _strain_and_axes(strain, state, formulation, frozen_column)
+    strain, angle = _strain_and_axes(strain, state, formulation, frozen_column,
+                                     getattr(params, "rotating_axes", "nearest"))
     printed = tuple(getattr(params, "printed_forms", ()))
     trial = _trial_stress(strain, angle, state, plane_stress, trial_stress, printed)
     eps_u = trial / state.secant_modulus  # step 4: secant (errata 1.1 on eq. 3.8)
@@ -299,7 +306,11 @@ def update_concrete(strain: np.ndarray, state: ConcreteState, params: Any, formu
         if plane_stress:
             new_stiffness = condense_plane_stress(new_stiffness)
         moduli = global_moduli(new_stiffness, directions["shear_modulus"], angle)
-    return stress, moduli, ConcreteState(strain=strain, stress=stress, angle=angle, **directions)
+    trial = ConcreteState(strain=strain, stress=stress, angle=angle, **directions)
+    if continuous_axes(params):  # the returned stress; the state keeps the law's
+        stress = resolved_stress(trial, state, params, formulation, update_concrete,
+                                 trial_stress, frozen)
+    return stress, moduli, trial
 
 
 def matrix_secant(state: ConcreteState) -> np.ndarray:
@@ -314,18 +325,6 @@ def matrix_secant(state: ConcreteState) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         actual = np.where(eps_u > 1e-12, local / eps_u, state.secant_modulus)
     return np.minimum(state.secant_modulus, actual)
-
-
-def take_parameters(params: Any, index: np.ndarray, n_points: int) -> Any:
-    """The parameters of the points `index`: per-point arrays (n,) are indexed, scalars kept."""
-    if not is_dataclass(params):
-        return params
-    changes = {}
-    for f in fields(params):
-        value = getattr(params, f.name)
-        if isinstance(value, np.ndarray) and value.shape[:1] == (n_points,):
-            changes[f.name] = value[index]
-    return replace(params, **changes) if changes else params
 
 
 def concrete_tangent(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,

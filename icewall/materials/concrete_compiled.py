@@ -28,6 +28,7 @@ import numpy as np
 from icewall.materials import concrete, orthotropic, uniaxial
 from icewall.materials.concrete import matrix_secant
 from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.rotation import continuous_axes, resolved_stress
 from icewall.materials.substep import update_concrete_substepped
 
 KERNEL_VARIABLE = "ICEWALL_CONCRETE_KERNEL"
@@ -91,7 +92,8 @@ def parameter_tuple(params: Any) -> tuple[float, ...]:
               surface.sigma_limit, concrete.LOADING_TOLERANCE, uniaxial.SECANT_FLOOR,
               orthotropic.PHI_MIN, orthotropic.ANGLE_TOLERANCE,
               params.mode_rule_band * params.ft, params.post_peak_strength == "peak",
-              getattr(params, "fallen_strength", "envelope") == "scaled"]
+              getattr(params, "fallen_strength", "envelope") == "scaled",
+              orthotropic.AXIS_PERIODS[getattr(params, "rotating_axes", "nearest")]]
     return tuple(float(v) for v in values)
 
 
@@ -144,7 +146,11 @@ def compiled_update(strain: np.ndarray, state: ConcreteState, params: Any, formu
     decayed = np.exp(-exponent)
     kernels.finish_pass(S, mask, frozen is not None, prm, work, flags, decayed,
                         np.exp(-exponent_at_max) if scaled else decayed, out)
-    return out[1], ConcreteState(*out)
+    trial = ConcreteState(*out)
+    if continuous_axes(params):  # the returned stress; the state keeps the law's
+        return resolved_stress(trial, state, params, formulation, _update, trial_stress,
+                               frozen), trial
+    return out[1], trial
 
 
 def _update(strain: np.ndarray, state: ConcreteState, params: Any, formulation: str,

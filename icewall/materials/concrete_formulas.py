@@ -46,15 +46,17 @@ def remainder(x: Any, y: Any) -> Any:
 
 # --- §3.2.2: axes and orthotropic stiffness -----------------------------------------------
 
-def principal_angle(xx: Any, yy: Any, xy: Any, previous: Any, major: Any, tolerance: float
-                    ) -> Any:
-    """beta: of the labellings (major, major + pi/2) of the principal strain axes the one
-    nearest `previous` (mod pi), unwrapped; `previous` where the in-plane strain is
-    isotropic within `tolerance` of its size. major = 0.5 atan2(xy / 2, (xx - yy) / 2)."""
+def principal_angle(xx: Any, yy: Any, xy: Any, previous: Any, major: Any, tolerance: float,
+                    period: float = 0.5 * np.pi) -> Any:
+    """beta of the principal strain axes, unwrapped next to `previous`: `period` pi/2, of the
+    labellings (major, major + pi/2) the one nearest `previous` (mod pi), which swaps where
+    the axes turn by 45 degrees from it; pi, the one with direction 1 on the major principal
+    strain (`rotating_axes: continuous`). `previous` where the in-plane strain is isotropic
+    within `tolerance` of its size. major = 0.5 atan2(xy / 2, (xx - yy) / 2)."""
     half_difference, half_shear = 0.5 * (xx - yy), 0.5 * xy
     radius = np.hypot(half_difference, half_shear)
     size = np.maximum(abs(xx), abs(yy)) + abs(half_shear)
-    delta = remainder(major - previous + 0.25 * np.pi, 0.5 * np.pi) - 0.25 * np.pi
+    delta = remainder(major - previous + 0.5 * period, period) - 0.5 * period
     return select(radius > tolerance * size, previous + delta, previous)
 
 

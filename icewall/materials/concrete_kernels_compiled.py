@@ -58,7 +58,7 @@ from icewall.materials.concrete_jit import fma, jit
 (P_E0, P_NU0, P_NU_MAX, P_FC, P_FT, P_EPS_C, P_EPS_T, P_SLOPE, P_RULE_EQUAL,
  P_A0, P_A1, P_A2, P_B0, P_B1, P_B2, P_LIMIT,
  P_LOADING_TOLERANCE, P_SECANT_FLOOR, P_PHI_MIN, P_ANGLE_TOLERANCE, P_MODE_BAND,
- P_KEEP_PEAK, P_SCALED) = range(23)
+ P_KEEP_PEAK, P_SCALED, P_AXIS_PERIOD) = range(24)
 # rows of the (n, N_WORK, 3) work array carried between the passes: per direction, then
 # W_RAY: sigma_bar, tau_bar, max |p| of the unit ray; W_AXES: cos, sin of beta
 W_TRIAL, W_EPS_U, W_STRENGTH, W_PEAK, W_LOCAL, W_RAY, W_AXES = range(7)
@@ -172,7 +172,8 @@ def trial_pass(strain, major, S, frozen, has_frozen, corotational, plane_strain,
         zz = 0.0 if plane_strain else strain[i, 2]
         committed = s_angle[i]
         angle = (committed if has_frozen and frozen[i]  # a frozen point keeps its axes
-                 else principal_angle(xx, yy, xy, committed, major[i], prm[P_ANGLE_TOLERANCE]))
+                 else principal_angle(xx, yy, xy, committed, major[i], prm[P_ANGLE_TOLERANCE],
+                                      prm[P_AXIS_PERIOD]))
         o_angle[i] = angle
         o_strain[i, 0], o_strain[i, 1], o_strain[i, 2], o_strain[i, 3] = xx, yy, zz, xy
         # steps 1-2: committed stress and strain increment in the new axes (errata 1.3)

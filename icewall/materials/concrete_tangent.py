@@ -57,7 +57,6 @@ from icewall.materials.concrete import (
     _envelope,
     loading_directions,
     past_peak,
-    take_parameters,
     update_concrete,
 )
 from icewall.materials.concrete_state import ConcreteState
@@ -70,6 +69,8 @@ from icewall.materials.orthotropic import (
     orthotropic_normal_stiffness,
     strain_rotation,
 )
+from icewall.materials.parameters import take_parameters
+from icewall.materials.rotation import continuous_axes, resolved_moduli
 from icewall.materials.ultimate_surface import strength_scale, strength_scale_gradient
 
 RELATIVE_STEP = 1e-6
@@ -336,6 +337,9 @@ def tangent_of_update(strain: np.ndarray, stress: np.ndarray, trial: ConcreteSta
                              "trial stresses; use method='differences'")
         L = np.zeros((strain.shape[0], 4, 4))
         L[:, :3, :3] = principal_moduli(trial, state, params, formulation)
+        if continuous_axes(params):  # the cone taken out of the returned stress (rotation.py)
+            L[:, :3, :3] = resolved_moduli(L[:, :3, :3], trial, state, params, formulation,
+                                           update, trial_stress)
     elif method == "differences":
         L = _differenced_moduli(strain, state, params, formulation, trial_stress, update, angle,
                                 principal, size)

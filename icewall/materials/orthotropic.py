@@ -19,6 +19,12 @@ PHI_MIN = 1e-3
 """Floor on the determinant phi of eq. 3.3d (errata §3: guard phi -> 0 as nu -> 0.5)."""
 ANGLE_TOLERANCE = 1e-9
 """In-plane principal-strain radius, relative to the strain size, below which beta is kept."""
+AXIS_PERIODS = {"nearest": 0.5 * np.pi, "continuous": np.pi}
+"""`rotating_axes` -> the period of principal_angle's labelling: the labelling nearest the
+committed axes (pi/2), or direction 1 on the major principal strain (pi)."""
+ROTATION_SLACK = 1e-9
+"""The bound on the rotating crack's shear stiffness (`rotating_axes: continuous`) acts beyond
+this fraction above G0: an isotropic elastic point, at G0 exactly, is left as it is."""
 
 
 def major_strain_angle(strain: np.ndarray) -> np.ndarray:
@@ -26,15 +32,19 @@ def major_strain_angle(strain: np.ndarray) -> np.ndarray:
     return 0.5 * np.arctan2(0.5 * strain[:, 3], 0.5 * (strain[:, 0] - strain[:, 1]))
 
 
-def principal_strain_angle(strain: np.ndarray, previous_angle: np.ndarray) -> np.ndarray:
+def principal_strain_angle(strain: np.ndarray, previous_angle: np.ndarray,
+                          rotating_axes: str = "nearest") -> np.ndarray:
     """Orthotropy angle beta (n,) of the in-plane principal strain axes (rotating crack, §3.2.2).
 
-    Of the two axis labellings (beta, beta + pi/2) the one nearest `previous_angle` (mod pi) is
-    kept, so directions 1 and 2 keep their damage as the axes rotate; the angle is stored
-    unwrapped. Where the in-plane strain is (nearly) isotropic the previous angle is kept.
+    "nearest": of the two axis labellings (beta, beta + pi/2) the one nearest `previous_angle`
+    (mod pi) is kept, so directions 1 and 2 keep their damage as the axes rotate (and swap it
+    where they turn by 45 degrees within an increment); "continuous": direction 1 on the major
+    principal strain. The angle is stored unwrapped. Where the in-plane strain is (nearly)
+    isotropic the previous angle is kept.
     """
     return principal_angle(strain[:, 0], strain[:, 1], strain[:, 3], previous_angle,
-                           major_strain_angle(strain), ANGLE_TOLERANCE)
+                           major_strain_angle(strain), ANGLE_TOLERANCE,
+                           AXIS_PERIODS[rotating_axes])
 
 
 def strain_rotation(angle: np.ndarray) -> np.ndarray:

@@ -7,7 +7,8 @@ units. Thesis values of Table 4.4 are kept in the tests, not here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, is_dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -96,6 +97,10 @@ class ConcreteParameters:
     # "envelope" = onto that envelope (Fig. 3.12 step 6; the stress jumps), "scaled" = the
     # envelope scaled through the committed point (continuous; concrete_formulas.scaled_envelope)
     fallen_strength: str = "envelope"
+    # the principal axes' labelling and rotation stiffness: "nearest" = the labelling nearest
+    # the committed axes; "continuous" = direction 1 on the major principal strain and the
+    # rotating crack's shear stiffness bounded by G0 (rotation.py)
+    rotating_axes: str = "nearest"
     # errata §1 corrections replaced by the printed form (deck printed_forms; PRINTED_FORMS)
     printed_forms: tuple[str, ...] = ()
     # descending branch in compression: "exponential" (eq. 3.11b) or "linear" (App. A)
@@ -124,6 +129,9 @@ class ConcreteParameters:
         if self.fallen_strength not in ("envelope", "scaled"):
             raise ValueError("fallen_strength must be 'envelope' or 'scaled', got "
                              f"{self.fallen_strength!r}")
+        if self.rotating_axes not in ("nearest", "continuous"):
+            raise ValueError("rotating_axes must be 'nearest' or 'continuous', got "
+                             f"{self.rotating_axes!r}")
 
     @property
     def snap_back_tension(self) -> bool:
@@ -144,7 +152,8 @@ POINT_FORMS = ("eq3.2", "eq3.3d", "eq3.11a", "eq3.13", "fig3.12_step5")
 
 _DEFAULTS = ("E0", "ft", "eps_c", "eps_t", "nu0", "Gf", "alpha", "G_cr", "k_t", "k_c",
              "nu_max", "surface", "peak_strain_slope", "compression_tension_rule",
-             "mode_rule_band", "post_peak_strength", "fallen_strength", "printed_forms",
+             "mode_rule_band", "post_peak_strength", "fallen_strength", "rotating_axes",
+             "printed_forms",
              "compression_branch")
 
 
@@ -227,6 +236,18 @@ def derive_concrete_parameters(fc: float, h_c: float, **overrides: object) -> Co
         compression_tension_rule=str(get("compression_tension_rule", "equal")),
         mode_rule_band=float(get("mode_rule_band", 0.0)),
         post_peak_strength=str(get("post_peak_strength", "ray")),
-        fallen_strength=str(get("fallen_strength", "envelope")), printed_forms=printed,
+        fallen_strength=str(get("fallen_strength", "envelope")),
+        rotating_axes=str(get("rotating_axes", "nearest")), printed_forms=printed,
         compression_branch=str(get("compression_branch", "exponential")))
 
+
+def take_parameters(params: Any, index: np.ndarray, n_points: int) -> Any:
+    """The parameters of the points `index`: per-point arrays (n,) are indexed, scalars kept."""
+    if not is_dataclass(params):
+        return params
+    changes = {}
+    for f in fields(params):
+        value = getattr(params, f.name)
+        if isinstance(value, np.ndarray) and value.shape[:1] == (n_points,):
+            changes[f.name] = value[index]
+    return replace(params, **changes) if changes else params

@@ -17,8 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from icewall.materials.concrete import take_parameters, update_concrete
+from icewall.materials.concrete import update_concrete
 from icewall.materials.concrete_state import ConcreteState
+from icewall.materials.parameters import take_parameters
 
 
 def update_concrete_substepped(strain: np.ndarray, state: ConcreteState, params: Any,

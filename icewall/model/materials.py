@@ -75,6 +75,7 @@ def concrete_parameters(c: Concrete, h_c: float) -> ConcreteParameters:
                                  "mode_rule_band": c.mode_rule_band,
                                  "post_peak_strength": c.post_peak_strength,
                                  "fallen_strength": c.fallen_strength,
+                                 "rotating_axes": c.rotating_axes,
                                  "nu_max": c.nu_max, "printed_forms": tuple(c.printed_forms),
                                  "compression_branch": c.compression_branch}
     for deck_key, key in (("E", "E0"), ("ft", "ft"), ("alpha", "alpha"), ("k_t", "k_t"),

@@ -92,6 +92,11 @@ def _parameters(variant: str, n: int):
         return derive_concrete_parameters(53.5, 100.0, compression_tension_rule="floor",
                                           mode_rule_band=0.5, post_peak_strength="peak",
                                           fallen_strength="scaled")
+    if variant == "continuous":  # and direction 1 on the major strain, G bounded by G0
+        return derive_concrete_parameters(53.5, 100.0, compression_tension_rule="floor",
+                                          mode_rule_band=0.5, post_peak_strength="peak",
+                                          fallen_strength="scaled",
+                                          rotating_axes="continuous")
     return PARAMS
 
 
@@ -133,7 +138,7 @@ def _reference(strain, state, params, formulation, trial, frozen):
 
 
 @pytest.mark.parametrize("variant", ["scalar", "per-point", "floor", "band", "peak",
-                                     "scaled"])
+                                     "scaled", "continuous"])
 @pytest.mark.parametrize("trial", TRIALS)
 @pytest.mark.parametrize("formulation", FORMULATIONS)
 def test_update_equals_numpy_along_the_paths(formulation, trial, variant):
