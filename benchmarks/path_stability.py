@@ -42,7 +42,7 @@ def newton_problem(deck_path: str, sets: list[str]
     deck = load_deck(deck_path, [*NEWTON, *sets]).deck
     mesh = build_mesh(deck)
     model = build_model(deck, mesh, region_materials(deck))
-    problem = build_problem(model, "newton")
+    problem = build_problem(model, solver_settings(model.description).scheme)
     start = PathState(np.zeros(model.dof_map.n_equations), 0.0,
                       problem.structure.initial_states())
     free = np.ones(model.dof_map.n_equations, dtype=bool)

@@ -7,15 +7,12 @@ from dataclasses import dataclass
 
 from icewall.deck.fields import option
 from icewall.formulations import FORMULATIONS
+from icewall.schemes import SCHEMES, declared
 
 SCHEME_DEFAULTS: dict[str, dict[str, float | int]] = {
-    "secant": {"tolerance_displacement": 0.05, "tolerance_load": 0.05, "max_iterations": 200,
-               "max_step_cuts": 4},  # the thesis' 5 % (4.2.3); a secant step may crawl
-    "newton": {"tolerance_displacement": 1e-4, "tolerance_load": 1e-4, "max_iterations": 40,
-               "max_step_cuts": 6},  # docs/solver.md: the runs of items 17-25
-}
+    name: dict(scheme.defaults) for name, scheme in SCHEMES.items()}
 """analysis.tolerance_displacement, tolerance_load, max_iterations and max_step_cuts of a deck
-that leaves them out, by analysis.scheme."""
+that leaves them out, by analysis.scheme (each scheme's own: icewall.schemes)."""
 CONVERGED_TOLERANCE = 1e-4
 """Tolerances at or below this make each step a converged equilibrium (issue 19's acceptance
 level; `icewall summary` says so, `icewall check` warns above it under Newton): at 1e-3 TF-1's
@@ -39,7 +36,7 @@ class Analysis:
                          "newton (Newton-Raphson with the consistent tangent, line search and "
                          "automatic step size); the tolerances, max_iterations and "
                          "max_step_cuts a deck leaves out take the scheme's defaults",
-                         choices=("secant", "newton"))
+                         choices=tuple(SCHEMES))
     tolerance_displacement: float | None = option(
         None, doc="displacement norm tolerance (eq. 4.4); default 0.05 under scheme secant "
         "(the thesis), 1e-4 under newton", exclusive_minimum=0.0, maximum=1.0)
@@ -141,7 +138,6 @@ class Analysis:
 
     def __post_init__(self) -> None:
         # the keys a deck leaves out (None) take its scheme's defaults
-        defaults = SCHEME_DEFAULTS.get(self.scheme, SCHEME_DEFAULTS["secant"])
-        for key, value in defaults.items():
+        for key, value in declared(self.scheme).defaults.items():
             if getattr(self, key) is None:
                 object.__setattr__(self, key, value)

@@ -15,14 +15,13 @@ import math
 import time
 from collections.abc import Iterator
 from dataclasses import replace
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from icewall.errors import ConvergenceError
 from icewall.model.structure import Evaluation
 from icewall.solve.problem import Problem
-from icewall.solve.settings import SolverSettings
 from icewall.solve.state import (
     Increment,
     PathState,
@@ -31,6 +30,9 @@ from icewall.solve.state import (
     external_force_norm,
     next_state,
 )
+
+if TYPE_CHECKING:
+    from icewall.solve.settings import SolverSettings
 
 # a load fall above this fraction of the largest load in one increment is suspect (a distant
 # equilibrium past a snap-back): halved, and at the smallest step a stop ("snap-back")
@@ -60,7 +62,7 @@ def _chatter(problem: Problem, settings: SolverSettings, states, flags_before, c
         changed = np.any(new != old, axis=1)
         total += int(np.count_nonzero(changed))
         changes[k] += changed
-        mask = changes[k] >= settings.max_flag_changes
+        mask = changes[k] >= settings.scheme.max_flag_changes
         freezable = problem.structure.groups[k].law.freezable
         frozen.append(mask if freezable and mask.any() else None)
         any_frozen |= frozen[-1] is not None
@@ -164,7 +166,7 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
     relaxation, previous_load_norm, previous_correction = 1.0, math.inf, None
     rises = 0  # times the load norm rose in this increment
     for iteration in range(1, settings.max_iterations + 1):
-        ev = s.evaluate(u, start.states, frozen, settings.iteration_secant == "returned")
+        ev = s.evaluate(u, start.states, frozen, settings.scheme.iteration_secant == "returned")
         if not np.all(np.isfinite(ev.internal_force)):
             raise StepFailed("non-finite internal forces", "NaN")
         frozen, flags_before = _chatter(problem, settings, ev.states, flags_before, changes,
@@ -178,15 +180,15 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
             return Increment("control" if target_deflection is not None else "preload",
                              -float(u[problem.control_equation]), P, preload_factor,
                              iteration - 1, disp_norm, load_norm, ev, u, forensics)
-        if factor is None or settings.stiffness_update == "every_iteration" or flips:
+        if factor is None or settings.scheme.stiffness_update == "every_iteration" or flips:
             factor = c.factorize(s.stiffness(ev))
         du, dm, dP = _correction(problem, factor, structural, u, target_deflection)
         if not (np.all(np.isfinite(du)) and math.isfinite(dP)):
             raise StepFailed("non-finite displacement correction", "NaN")
         rises += iteration >= 3 and load_norm > previous_load_norm
-        relaxation = _relaxation(settings.acceleration, iteration, relaxation, du,
+        relaxation = _relaxation(settings.scheme.acceleration, iteration, relaxation, du,
                                  previous_correction, load_norm, previous_load_norm,
-                                 _growth_limit(settings.max_relaxation,
+                                 _growth_limit(settings.scheme.max_relaxation,
                                                rises if damp_cycles else 0))
         previous_correction, previous_load_norm = du, load_norm
         # (multipliers are not relaxed: prescribed ones, e.g. zero on open pairs, stay exact)
@@ -202,7 +204,7 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
 
 class _Attempt(NamedTuple):
     """_advance's next try: its step size, iteration scheme (index into _schemes), the steps
-    over a stall made so far (settings.max_jumps) and whether this try is one."""
+    over a stall made so far (the scheme's max_jumps) and whether this try is one."""
 
     size: float
     retry: int = 0
@@ -223,10 +225,10 @@ def _after_failure(exc: StepFailed | ConvergenceError, settings: SolverSettings,
         # the smallest step with each fallback (same equilibrium, same tolerances)
         log.info("%s %.4g: retrying the smallest step with fallback %d", kind, goal, retry + 1)
         return attempt._replace(retry=retry + 1)
-    if size <= smallest and kind == "control" and jumps < settings.max_jumps:
+    if size <= smallest and kind == "control" and jumps < settings.scheme.max_jumps:
         # step over the stall from the last converged state, as a stroke-controlled
         # test goes on past a local instability (recorded in the history)
-        size = settings.jump_increments * step_size
+        size = settings.scheme.jump_increments * step_size
         log.info("control %.4g: stepping over the stall to %.4g (jump %d)", goal,
                  current + size, jumps + 1)
         return _Attempt(size, 0, jumps + 1, True)
@@ -315,13 +317,15 @@ def _schemes(settings: SolverSettings) -> list[tuple[SolverSettings, bool]]:
     secant iteration walks the load down a long way (VTT1, one realization, at 8.94 mm:
     2.38 -> 1.14 MN in 203 iterations; the run stopped at the deck's 200). Each fallback comes
     after those that were there before it, so a run that never needs it is unchanged."""
+    secant = settings.scheme
     schemes = [(settings, True)]
-    if settings.acceleration == "halving":
+    if secant.acceleration == "halving":
         schemes.append((settings, False))
-    if settings.acceleration != "aitken":
-        schemes.append((replace(settings, acceleration="aitken"), True))
-    if settings.iteration_secant != "returned":
-        schemes.append((replace(settings, iteration_secant="returned"), True))
+    if secant.acceleration != "aitken":
+        schemes.append((replace(settings, scheme=replace(secant, acceleration="aitken")), True))
+    if secant.iteration_secant != "returned":
+        schemes.append((replace(settings, scheme=replace(secant, iteration_secant="returned")),
+                        True))
     schemes.append((replace(settings, max_iterations=LONG_ITERATIONS * settings.max_iterations),
                     False))
     return schemes

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
@@ -35,8 +36,10 @@ import scipy.sparse as sp
 from icewall.errors import ConvergenceError
 from icewall.solve.newton import newton_increment, static_load_norm
 from icewall.solve.problem import Problem
-from icewall.solve.settings import SolverSettings
 from icewall.solve.state import Increment, PathState, StepFailed
+
+if TYPE_CHECKING:
+    from icewall.solve.settings import SolverSettings
 
 log = logging.getLogger(__name__)
 

@@ -38,6 +38,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -47,9 +48,11 @@ from icewall.solve.imperfection import Seed
 from icewall.solve.integrator import Dynamics, GeneralizedAlpha, Motion, TimeStep, ramp
 from icewall.solve.newton import newton_increment, static_load_norm
 from icewall.solve.problem import Problem
-from icewall.solve.settings import SolverSettings
 from icewall.solve.stability import fastest_growth, stable_under_stroke
 from icewall.solve.state import Increment, PathState, StepFailed
+
+if TYPE_CHECKING:
+    from icewall.solve.settings import SolverSettings
 
 log = logging.getLogger(__name__)
 
@@ -99,8 +102,9 @@ begins to fall. (A jump would impose an infinite acceleration on the held point.
 
 def drop_dynamics(problem: Problem, settings: SolverSettings, omega: float) -> Dynamics:
     """The drops' mass, damping and integrator (omega: the first mode's frequency, rad/s)."""
-    return Dynamics(problem.mass, omega, settings.damping_ratio,
-                    GeneralizedAlpha(settings.spectral_radius), settings.time_step_scale)
+    scheme = settings.scheme  # solve.schemes.Dynamic
+    return Dynamics(problem.mass, omega, scheme.damping_ratio,
+                    GeneralizedAlpha(scheme.spectral_radius), scheme.time_step_scale)
 
 
 def dynamic_drop(problem: Problem, settings: SolverSettings, state: PathState, control,

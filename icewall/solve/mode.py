@@ -84,7 +84,7 @@ class Mode:
             return (path.snap_back_control(self.release),
                     f"control {current:.4g} (snap-back control, step {self.release:.3g})")
         step = self.size if self.name == "displacement" else steps.smallest
-        if self.name == "drop" and (settings.drop_held == "stroke"
+        if self.name == "drop" and (settings.scheme.drop_held == "stroke"
                                     or problem.mass is not None):
             # a dynamic drop holds the stroke, the jack loads' work-conjugate displacement:
             # a point elsewhere held through them is no constraint a loading system applies
@@ -138,7 +138,7 @@ class Mode:
             return
         if self.size > steps.smallest * (1 + 1e-9):
             self.size = steps.after_failure(self.size, where, reason, str(exc))
-        elif reason != "singular system" and settings.trace_snap_backs:
+        elif reason != "singular system" and settings.scheme.trace_snap_backs:
             # no equilibrium at the next deflection: a snap-back, followed by its control
             self.release = FIRST_OPENING
             self._switch("opening", where)
@@ -160,7 +160,7 @@ class Mode:
             self.slope = d_load / d_deflection if d_deflection > 0.0 else math.nan
         elif self.name == "opening":
             inc.snap_back = d_deflection < 0.0
-            growth = math.sqrt(settings.target_iterations / max(inc.iterations, 1))
+            growth = math.sqrt(settings.scheme.target_iterations / max(inc.iterations, 1))
             self.release *= min(2.0, max(0.5, growth))
             if abs(inc.load_factor) <= settings.tolerance_load * self.peak:
                 # the snap-back has separated the structure (no load left within the

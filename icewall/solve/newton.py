@@ -25,11 +25,11 @@ import numpy as np
 from icewall.errors import ConvergenceError
 from icewall.solve.controls import LoadControl
 from icewall.solve.problem import Problem
-from icewall.solve.settings import SolverSettings
 from icewall.solve.state import Increment, PathState, StepFailed, external_force_norm
 
 if TYPE_CHECKING:
     from icewall.solve.drop import Dampers
+    from icewall.solve.settings import SolverSettings
 
 log = logging.getLogger(__name__)
 

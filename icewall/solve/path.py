@@ -21,6 +21,7 @@ import math
 import time
 from collections.abc import Iterator
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,7 +38,6 @@ from icewall.solve.integrator import first_mode_frequency
 from icewall.solve.mode import STILL, Mode
 from icewall.solve.newton import newton_increment
 from icewall.solve.problem import Problem
-from icewall.solve.settings import SolverSettings
 from icewall.solve.stability import require_stable
 from icewall.solve.state import (
     Increment,
@@ -47,6 +47,9 @@ from icewall.solve.state import (
     next_state,
 )
 from icewall.solve.steps import StepSizeController
+
+if TYPE_CHECKING:
+    from icewall.solve.settings import SolverSettings
 
 log = logging.getLogger(__name__)
 

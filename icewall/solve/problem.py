@@ -33,18 +33,18 @@ class Problem:
                      for group, state in zip(self.structure.groups, states, strict=True))
 
 
-def build_problem(model: Model, scheme: str = "secant") -> Problem:
-    """The material groups, structure and constraints of `model`, set up for `scheme`
-    (secant | newton): the one place a Problem is made from a model."""
+def build_problem(model: Model, scheme=None) -> Problem:
+    """The material groups, structure and constraints of `model`, set up for `scheme` (an
+    icewall.solve.schemes object; None: the constraints as built, no mass): the one place a
+    Problem is made from a model."""
     groups = build_groups(model.description, model.cell_material, model.gauss_spacing,
                           model.kinematics.dV.shape[1])
     structure = Structure(model.kinematics, model.assembler, groups)
     constraints = make_constraints(model)
     mass = None
-    if scheme == "newton":
-        newton_constraints(constraints)
-        if model.description.analysis.drops == "dynamic":
-            mass = wall_mass(model)
+    if scheme is not None:
+        scheme.prepare(constraints)
+        mass = scheme.mass(model)
     return Problem(structure, constraints, model.reference_load, model.preload,
                    model.control_equation, mass)
 

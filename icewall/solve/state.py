@@ -47,7 +47,7 @@ class Increment:
     cuts: int = 0
     wall_time: float = 0.0
     snap_back: bool = False  # the load dropped in a jump displacement control cannot follow
-    jumped: bool = False  # a step over a stall (settings.max_jumps, jump_increments)
+    jumped: bool = False  # a step over a stall (the secant scheme's max_jumps, jump_increments)
     # a dynamic drop's work terms summed over its time steps (solve.energy.DropEnergy): the
     # energy account takes them instead of one trapezoid from the drop's start to its end
     path_energy: Any = None

@@ -24,9 +24,10 @@ class StepSizeController:
     @classmethod
     def of(cls, settings, largest: float) -> StepSizeController:
         """The controller of a stage whose largest step is `largest`: `settings.max_step_cuts`
-        halvings below it, aimed at `settings.target_iterations` (a SolverSettings)."""
+        halvings below it, aimed at the scheme's `target_iterations` (a SolverSettings whose
+        scheme is the Newton scheme)."""
         return cls(largest=largest, smallest=largest / 2 ** settings.max_step_cuts,
-                   target_iterations=settings.target_iterations)
+                   target_iterations=settings.scheme.target_iterations)
 
     def after_success(self, size: float, iterations: int) -> float:
         ratio = math.sqrt(self.target_iterations / max(iterations, 1))

@@ -16,6 +16,7 @@ from icewall.model.materials import MaterialGroup
 from icewall.model.structure import Structure
 from icewall.solve.constraints import SupportConstraints
 from icewall.solve.problem import Problem
+from icewall.solve.schemes import Secant
 from icewall.solve.settings import SolverSettings
 from icewall.solve.state import PathState
 
@@ -88,11 +89,11 @@ def bar_problem(length: float, n_el: int, E=30000.0, strength=3.0, weak=0.9,
 
 
 def settings(target: float, increment: float, tolerance: float = 1e-8, iterations: int = 400,
-             cuts: int = 4, on_snap_back: str = "stop") -> SolverSettings:
+             cuts: int = 4, on_snap_back: str = "stop", **secant) -> SolverSettings:
+    """The secant scheme's settings (`secant`: its own, e.g. max_jumps)."""
     return SolverSettings(tolerance_displacement=tolerance, tolerance_load=tolerance,
-                          max_iterations=iterations, max_step_cuts=cuts,
-                          stiffness_update="every_iteration", increment=increment,
+                          max_iterations=iterations, max_step_cuts=cuts, increment=increment,
                           target=target, preload_increments=1, reset_slip_each_step=True,
-                          on_snap_back=on_snap_back)
+                          on_snap_back=on_snap_back, scheme=Secant(**secant))
 
 

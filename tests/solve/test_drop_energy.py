@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from test_newton import newton_bar, newton_settings
+from test_newton import dynamic_settings, newton_bar
 
 import icewall.solve.dynamic as dynamic
 from icewall.fem.mass import lumped_mass_vector
@@ -42,8 +42,8 @@ def _drop(rho_inf: float, damping_ratio: float):
     """STEPS committed time steps of a drop from rest at zero to the held stroke STROKE:
     (time steps, [(u, v, a, load factor)] at their ends, the drop)."""
     problem, initial = _bar()
-    settings = replace(newton_settings(STROKE, STROKE), spectral_radius=rho_inf,
-                       damping_ratio=damping_ratio)
+    settings = dynamic_settings(STROKE, STROKE, spectral_radius=rho_inf,
+                                damping_ratio=damping_ratio)
     dynamics = dynamic.drop_dynamics(problem, settings, _omega())
     drop = dynamic._Drop(problem, settings, initial,
                          DisplacementControl(problem.control_equation, STROKE), 0.0, dynamics)

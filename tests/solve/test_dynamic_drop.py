@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 from softening_bar import SofteningLaw, SofteningParams
-from test_newton import newton_bar, newton_settings
+from test_newton import dynamic_settings, newton_bar, newton_settings
 
 import icewall.solve.dynamic as dynamic
 from icewall.fem.mass import lumped_mass_vector
@@ -79,8 +79,8 @@ def _run(residual: bool, **changes):
 def _cached_run(residual: bool, changes: tuple):
     """One run per setting for the whole module (the tests only read them)."""
     problem, initial = massive_bar(residual)
-    chosen = replace(newton_settings(0.15, 0.02, cuts=3, trace=False),
-                     on_snap_back="continue", **dict(changes))
+    chosen = replace(dynamic_settings(0.15, 0.02, cuts=3, trace=False, **dict(changes)),
+                     on_snap_back="continue")
     return problem, list(follow_path(problem, chosen, initial))
 
 
@@ -202,7 +202,7 @@ def test_the_drop_ends_where_the_motion_no_longer_moves_its_equilibrium(monkeypa
     assert drop.path_energy.kinetic > 0.1 * drop.path_energy.largest_kinetic
     monkeypatch.setattr(dynamic._Drop, "_agrees", lambda self, before, after: False)
     problem, initial = massive_bar(True)
-    chosen = replace(newton_settings(0.15, 0.02, cuts=3, trace=False),
+    chosen = replace(dynamic_settings(0.15, 0.02, cuts=3, trace=False),
                      on_snap_back="continue")
     damped, damped_after = _first_drop(list(follow_path(problem, chosen, initial)))
     assert damped_after == pytest.approx(after, rel=1e-9)
@@ -216,7 +216,7 @@ def test_a_time_step_never_grows_past_a_twentieth_of_the_first_period(scale):
     # local error to bound its steps; unbounded they doubled to 1e157 s on CF-4 at 10.93 mm,
     # where an implicit step that long damps the growth of the unstable mode it was to follow
     problem, initial = massive_bar(residual=False)
-    settings = replace(newton_settings(0.15, 0.02, cuts=3, trace=False), time_step_scale=scale)
+    settings = dynamic_settings(0.15, 0.02, cuts=3, trace=False, time_step_scale=scale)
     dynamics = dynamic.drop_dynamics(problem, settings, omega=2.0 * np.pi * 1000.0)
     drop = dynamic._Drop(problem, settings, initial,
                          DisplacementControl(problem.control_equation, 0.0), 0.0, dynamics)

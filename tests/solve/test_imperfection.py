@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from test_dynamic_drop import AREA, RESIDUAL, F, _after_drop, _run, massive_bar
-from test_newton import newton_settings
+from test_newton import dynamic_settings, newton_settings
 
 import icewall.solve.dynamic as dynamic
 import icewall.solve.imperfection as imperfection
@@ -28,7 +28,7 @@ from icewall.solve.stability import (
     unstable_mode,
 )
 
-SETTINGS = replace(newton_settings(0.15, 0.02, cuts=3, trace=False), on_snap_back="continue")
+SETTINGS = replace(dynamic_settings(0.15, 0.02, cuts=3, trace=False), on_snap_back="continue")
 
 
 def _descending_state():

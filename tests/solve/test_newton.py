@@ -15,6 +15,7 @@ from icewall.errors import ConvergenceError
 from icewall.model.materials import MaterialGroup
 from icewall.model.structure import Structure
 from icewall.solve.path import follow_path
+from icewall.solve.schemes import Dynamic, Newton
 from icewall.solve.steps import StepSizeController
 
 
@@ -58,9 +59,16 @@ def newton_bar(length, n_el, E=30000.0, strength=3.0, weak=0.9, failure_strain=0
     return replace(problem, structure=structure), initial
 
 
-def newton_settings(target, increment, tolerance=1e-9, iterations=25, cuts=6, trace=True):
-    return replace(settings(target, increment, tolerance, iterations, cuts), scheme="newton",
-                   trace_snap_backs=trace)
+def newton_settings(target, increment, tolerance=1e-9, iterations=25, cuts=6, trace=True,
+                    scheme=Newton, **options):
+    """The Newton scheme's settings (`options`: its own, e.g. drop_held)."""
+    return replace(settings(target, increment, tolerance, iterations, cuts),
+                   scheme=scheme(trace_snap_backs=trace, **options))
+
+
+def dynamic_settings(target, increment, **options):
+    """The settings of the Newton scheme with dynamic drops (`options`: newton_settings')."""
+    return newton_settings(target, increment, scheme=Dynamic, **options)
 
 
 def test_linear_bar_converges_in_one_newton_iteration():
@@ -262,8 +270,8 @@ def test_without_tracing_the_snap_back_the_load_drops_at_the_peak_deflection(hel
     problem, initial = newton_bar(length, 10, failure_strain=eps_f)
     # (held: the drop holds the control deflection, or the stroke under the load, here the
     # same displacement of the loaded end)
-    chosen = replace(newton_settings(0.2, 0.02, cuts=3, trace=False), on_snap_back="continue",
-                     drop_held=held)
+    chosen = replace(newton_settings(0.2, 0.02, cuts=3, trace=False, drop_held=held),
+                     on_snap_back="continue")
     steps = list(follow_path(problem, chosen, initial))
     d = np.array([inc.control_displacement for inc, _ in steps])
     P = np.array([inc.load_factor for inc, _ in steps])

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 from softening_bar import bar_problem, settings
@@ -94,7 +92,7 @@ def test_fallback_schemes_on_the_smallest_step():
     base = settings(1.0, 0.1)
     schemes, n = _schemes(base), base.max_iterations
     assert len(schemes) == FALLBACKS + 1
-    assert [(s.acceleration, damp, s.iteration_secant, s.max_iterations)
+    assert [(s.scheme.acceleration, damp, s.scheme.iteration_secant, s.max_iterations)
             for s, damp in schemes] == [
         ("halving", True, "committed", n), ("halving", False, "committed", n),
         ("aitken", True, "committed", n), ("halving", True, "returned", n),
@@ -103,9 +101,10 @@ def test_fallback_schemes_on_the_smallest_step():
         assert (scheme.tolerance_load, scheme.tolerance_displacement) == (
             base.tolerance_load, base.tolerance_displacement)
     # a fallback that would repeat the failed iteration exactly is not tried
-    assert [(s.acceleration, damp) for s, damp in _schemes(replace(base, acceleration="none"))
+    assert [(s.scheme.acceleration, damp)
+            for s, damp in _schemes(settings(1.0, 0.1, acceleration="none"))
             ] == [("none", True), ("aitken", True), ("none", True), ("none", False)]
-    only_long = _schemes(replace(base, acceleration="aitken", iteration_secant="returned"))
+    only_long = _schemes(settings(1.0, 0.1, acceleration="aitken", iteration_secant="returned"))
     assert [s.max_iterations for s, _ in only_long] == [n, LONG_ITERATIONS * n]
 
 
@@ -130,7 +129,7 @@ def test_a_stall_is_stepped_over_and_recorded(monkeypatch):
     length, n_el, E, f, weak, eps_f = 100.0, 10, 30000.0, 3.0, 0.9, 0.002
     problem, initial = bar_problem(length, n_el, E, f, weak, eps_f)
     attempted = _stall_between(monkeypatch, 0.0060, 0.0071)  # fails on the way to 0.007
-    run = replace(settings(0.012, 0.001, cuts=2), max_jumps=1)
+    run = settings(0.012, 0.001, cuts=2, max_jumps=1)
     incs = [inc for inc, _ in follow_path(problem, run, initial)]
     deflections = [round(inc.control_displacement, 9) for inc in incs]
     assert 0.007 not in deflections and 0.008 in deflections

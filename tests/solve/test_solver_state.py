@@ -35,7 +35,7 @@ def _never_converges(monkeypatch):
 
 
 def _run(problem, initial, cursor=None):
-    s = replace(settings(1.0, 0.1, cuts=1), max_jumps=2)
+    s = settings(1.0, 0.1, cuts=1, max_jumps=2)
     start = initial if cursor is None else replace(initial, cursor=cursor)
     with pytest.raises(ConvergenceError) as info:
         list(follow_path(problem, s, start, resume=cursor is not None))
