@@ -53,7 +53,7 @@ def our_iterations(mesh_path: Path, iterations: int, backends: tuple[str, ...]) 
     from icewall.mesh.mesh import CONCRETE, Mesh, Region
     from icewall.model.build import Model
     from icewall.model.description import ModelDescription
-    from icewall.solve.control import follow_path
+    from icewall.solve.path import follow_path
     from icewall.solve.problem import build_problem
     from icewall.solve.settings import solver_settings
     from icewall.solve.state import PathState

@@ -9,7 +9,7 @@ straight line"); with ``platen="fixed"`` u_r = 0 there too ("fixed to reflect no
 
 The model goes the walls' path: a `ModelDescription` (the deck's own `Concrete`, `Analysis`
 and `Control` sections) and a `Model`, whose problem `build_problem` makes as for every wall,
-solved by `icewall.solve.control.follow_path` (displacement control, eqs. 3.44-3.50). Its result is
+solved by `icewall.solve.path.follow_path` (displacement control, eqs. 3.44-3.50). Its result is
 the average stress P / (pi R^2) against the average strain delta / (H / 2), compression > 0.
 """
 
@@ -33,7 +33,7 @@ from icewall.mesh.mesh import CONCRETE, Mesh
 from icewall.mesh.structured import rectangle_mesh
 from icewall.model.build import Model
 from icewall.model.description import ModelDescription
-from icewall.solve.control import follow_path
+from icewall.solve.path import follow_path
 from icewall.solve.problem import Problem, build_problem
 from icewall.solve.settings import solver_settings
 from icewall.solve.state import PathState

@@ -1,6 +1,7 @@
-"""Path following: load control of the preload (Newton-Raphson with the secant stiffness) and
-displacement control (thesis 3.5, eqs. 3.44-3.50, Fig. 3.18 with errata 1.3), each a generator
-of converged increments so that the writer keeps every converged step on disk.
+"""The thesis' secant scheme: load control of the preload (Newton-Raphson with the secant
+stiffness) and displacement control (thesis 3.5, eqs. 3.44-3.50, Fig. 3.18 with errata 1.3),
+one increment iterated by `_iterate` and the stages of the path by `SecantStage` (the loop:
+solve/path.py; what follows a failed step: solve/recovery.py).
 
 Each iteration factorises one matrix and solves it for two right-hand sides: the reference
 load R* (3.46) and the unbalance dQ plus the interface rows (3.45); the load-factor increment
@@ -12,23 +13,21 @@ from __future__ import annotations
 
 import logging
 import math
-import time
-from collections.abc import Iterator
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from icewall.errors import ConvergenceError
 from icewall.model.structure import Evaluation
 from icewall.solve.problem import Problem
+from icewall.solve.recovery import Attempt, SnapBack, after_failure, fallbacks
 from icewall.solve.state import (
     Increment,
     PathState,
     SecantCursor,
     StepFailed,
     external_force_norm,
-    next_state,
 )
 
 if TYPE_CHECKING:
@@ -202,152 +201,79 @@ def _iterate(problem: Problem, settings: SolverSettings, start: PathState,
                      f"norm {disp_norm:.3g}, load norm {load_norm:.3g})", "non-convergence")
 
 
-class _Attempt(NamedTuple):
-    """_advance's next try: its step size, iteration scheme (index into _schemes), the steps
-    over a stall made so far (the scheme's max_jumps) and whether this try is one."""
+class SecantStage:
+    """A stage of the secant scheme (solve.path.Stage): the preload by load control to its
+    whole, or displacement control to the target, in steps of the deck's size; a failed step
+    and a load drop displacement control cannot follow are cut (recovery.after_failure), and
+    at the smallest step such a drop is accepted as a snap-through at the held deflection
+    (on_snap_back: continue) or ends the run."""
 
-    size: float
-    retry: int = 0
-    jumps: int = 0
-    jumping: bool = False
+    direction = None  # the secant iteration keeps no predictor direction
 
+    def __init__(self, name: str, problem: Problem, settings: SolverSettings,
+                 state: PathState, cursor: SecantCursor | None = None) -> None:
+        control = name == "control"
+        self.name, self.problem, self.settings = name, problem, settings
+        self.target = settings.target if control else 1.0
+        self.preload = 1.0 if problem.preload is not None else 0.0
+        self.step_size = settings.increment if control else 1.0 / settings.preload_increments
+        self.smallest = self.step_size / 2 ** settings.max_step_cuts * (1 + 1e-9)
+        self.current = (-float(state.u[problem.control_equation]) if control
+                        else state.preload_factor)
+        self.attempt, self.peak = Attempt(self.step_size), state.load_factor
+        if cursor is not None:  # the checkpoint holds the jumps: a resumed run makes no more
+            self.current, self.peak = cursor.position, cursor.peak
+            self.attempt = Attempt(cursor.size, jumps=cursor.jumps)
+        self.goal, self.snap = self.current, False
 
-def _after_failure(exc: StepFailed | ConvergenceError, settings: SolverSettings, kind: str,
-                   goal: float, current: float, step_size: float, smallest: float,
-                   attempt: _Attempt) -> _Attempt:
-    """The try after a failed increment to `goal`: on the smallest step each fallback scheme,
-    then a step over the stall (control only), else half the step; ConvergenceError if none."""
-    reason = getattr(exc, "reason", "non-convergence")
-    size, retry, jumps, jumping = attempt
-    if (size <= smallest and reason == "non-convergence"
-            and retry < len(_schemes(settings)) - 1):
-        # the damped relaxation can crawl where another scheme gets through: retry
-        # the smallest step with each fallback (same equilibrium, same tolerances)
-        log.info("%s %.4g: retrying the smallest step with fallback %d", kind, goal, retry + 1)
-        return attempt._replace(retry=retry + 1)
-    if size <= smallest and kind == "control" and jumps < settings.scheme.max_jumps:
-        # step over the stall from the last converged state, as a stroke-controlled
-        # test goes on past a local instability (recorded in the history)
-        size = settings.scheme.jump_increments * step_size
-        log.info("control %.4g: stepping over the stall to %.4g (jump %d)", goal,
-                 current + size, jumps + 1)
-        return _Attempt(size, 0, jumps + 1, True)
-    if jumping:
-        raise ConvergenceError(f"{exc} at {kind} {goal:.4g}, also when stepping over "
-                               f"the stall ({jumps} jumps)", reason=reason) from None
-    if size <= smallest:
-        raise ConvergenceError(f"{exc} at {kind} {goal:.4g} after "
-                               f"{settings.max_step_cuts} step cuts",
-                               reason=reason) from None
-    return attempt._replace(size=0.5 * size)
+    def done(self, state: PathState) -> bool:
+        return not self.current < self.target - 1e-12 * max(1.0, abs(self.target))
 
+    def step(self, state: PathState) -> Increment:
+        """The increment to the next goal under the try's iteration; SnapBack where its load
+        drops more than the path can follow and the step is not yet the smallest."""
+        settings, attempt = self.settings, self.attempt
+        self.goal = min(self.current + attempt.size, self.target)
+        scheme, damp_cycles = fallbacks(settings)[attempt.retry]
+        if self.name == "control":
+            inc = _iterate(self.problem, scheme, state, self.goal, self.preload, damp_cycles)
+        else:
+            inc = _iterate(self.problem, scheme, state, None, self.goal, damp_cycles)
+        self.snap = self.name == "control" and _abrupt_drop(state, inc, self.peak)
+        if self.snap and not ((attempt.size <= self.smallest or attempt.jumping)
+                              and settings.on_snap_back == "continue"):
+            raise SnapBack(
+                f"snap-back at the control point: the load drops from {state.load_factor:.4g}"
+                f" to {inc.load_factor:.4g} within {self.goal - self.current:.3g} mm and the "
+                f"drop does not shrink with the step ({settings.max_step_cuts} cuts); "
+                "displacement control cannot follow this branch")
+        return inc
 
-def _advance(problem: Problem, settings: SolverSettings, state: PathState, target, preload,
-             step_size: float, kind: str, resume: SecantCursor | None = None
-             ) -> Iterator[tuple[Increment, PathState]]:
-    """Reach `target` (deflection or preload fraction) from `state`, halving failed steps."""
-    c = problem.constraints
-    smallest = step_size / 2 ** settings.max_step_cuts * (1 + 1e-9)
-    current = (-float(state.u[problem.control_equation]) if kind == "control"
-               else state.preload_factor)
-    attempt = _Attempt(step_size)
-    peak_load = state.load_factor
-    if resume is not None:  # the checkpoint holds the jumps: a resumed run makes no more
-        current, peak_load = resume.position, resume.peak
-        attempt = _Attempt(resume.size, jumps=resume.jumps)
-    while current < target - 1e-12 * max(1.0, abs(target)):
-        goal = min(current + attempt.size, target)
-        tic = time.perf_counter()
-        scheme, damp_cycles = _schemes(settings)[attempt.retry]
-        try:
-            if kind == "control":
-                inc = _iterate(problem, scheme, state, goal, preload, damp_cycles)
-            else:
-                inc = _iterate(problem, scheme, state, None, goal, damp_cycles)
-        except (StepFailed, ConvergenceError) as exc:
-            c.rollback()
-            attempt = _after_failure(exc, settings, kind, goal, current, step_size, smallest,
-                                     attempt)
-            continue
-        snap = kind == "control" and _abrupt_drop(state, inc, peak_load)
-        if snap and not ((attempt.size <= smallest or attempt.jumping)
-                         and settings.on_snap_back == "continue"):
-            c.rollback()
-            if attempt.size <= smallest:
-                raise ConvergenceError(
-                    f"snap-back at the control point: the load drops from {state.load_factor:.4g}"
-                    f" to {inc.load_factor:.4g} within {goal - current:.3g} mm and the drop does "
-                    f"not shrink with the step ({settings.max_step_cuts} cuts); displacement "
-                    "control cannot follow this branch", reason="snap-back") from None
-            attempt = attempt._replace(size=0.5 * attempt.size)
-            continue
-        c.commit()
-        inc.jumped = attempt.jumping
-        inc.snap_back = bool(snap)  # accepted load drop (on_snap_back: continue)
-        if snap:
-            log.info("snap-back at %.4g mm accepted: load %.4g -> %.4g", goal,
+    def failed(self, exc: StepFailed | ConvergenceError, state: PathState) -> None:
+        self.attempt = after_failure(exc, self.settings, self.name, self.goal, self.current,
+                                     self.step_size, self.smallest, self.attempt)
+
+    def converged(self, state: PathState, inc: Increment) -> Increment:
+        """The increment with its flags (jumped, snap_back, cuts); the next try grows back
+        after a cut step, with the deck's iteration and no jump under way."""
+        if self.snap:  # accepted load drop (on_snap_back: continue)
+            log.info("snap-back at %.4g mm accepted: load %.4g -> %.4g", self.goal,
                      state.load_factor, inc.load_factor)
-        peak_load = max(peak_load, inc.load_factor)
-        inc.cuts = round(math.log2(step_size / attempt.size))
-        inc.wall_time = time.perf_counter() - tic
-        current = goal
-        # grow back after a successful cut step; the deck's scheme again, no jump under way
-        attempt = _Attempt(min(step_size, 2.0 * attempt.size), jumps=attempt.jumps)
-        state = next_state(problem, state, inc,
-                           SecantCursor(kind, current, attempt.size, peak_load, attempt.jumps))
-        yield inc, state
+        attempt = self.attempt
+        self.peak = max(self.peak, inc.load_factor)
+        self.current = self.goal
+        self.attempt = Attempt(min(self.step_size, 2.0 * attempt.size), jumps=attempt.jumps)
+        return replace(inc, jumped=attempt.jumping, snap_back=bool(self.snap),
+                       cuts=round(math.log2(self.step_size / attempt.size)))
 
+    def cursor(self) -> SecantCursor:
+        return SecantCursor(self.name, self.current, self.attempt.size, self.peak,
+                            self.attempt.jumps)
 
-FALLBACKS = 4
-"""Iteration schemes tried at most, in turn, on a smallest step that did not converge."""
-
-LONG_ITERATIONS = 3
-"""The last fallback iterates this many times the deck's iteration limit (a snap-through)."""
-
-
-def _schemes(settings: SolverSettings) -> list[tuple[SolverSettings, bool]]:
-    """(settings, cycle damping) of the deck's own scheme and of each fallback that differs
-    from it: the halving relaxation without the cycle damping (only the halving scheme reads
-    it), then Aitken's relaxation (unless that is the setting), then the deck's relaxation with
-    the returned secant in the iteration matrix (concrete.matrix_secant): the concrete E_i no
-    stiffer than the stress the update returned, which frozen points held at their envelope
-    are (CF-8 at 9.6-11.5 mm crawled at a load norm of 0.08-0.12 with 80 such points under
-    every other scheme). Last of all, the deck's relaxation without cycle damping and with
-    LONG_ITERATIONS times the iteration limit: at a snap-through on the smallest step the
-    secant iteration walks the load down a long way (VTT1, one realization, at 8.94 mm:
-    2.38 -> 1.14 MN in 203 iterations; the run stopped at the deck's 200). Each fallback comes
-    after those that were there before it, so a run that never needs it is unchanged."""
-    secant = settings.scheme
-    schemes = [(settings, True)]
-    if secant.acceleration == "halving":
-        schemes.append((settings, False))
-    if secant.acceleration != "aitken":
-        schemes.append((replace(settings, scheme=replace(secant, acceleration="aitken")), True))
-    if secant.iteration_secant != "returned":
-        schemes.append((replace(settings, scheme=replace(secant, iteration_secant="returned")),
-                        True))
-    schemes.append((replace(settings, max_iterations=LONG_ITERATIONS * settings.max_iterations),
-                    False))
-    return schemes
+    def stop(self) -> None:
+        """Nothing ends the stage after a converged step."""
 
 
 def _abrupt_drop(state: PathState, inc: Increment, peak_load: float) -> bool:
     return (peak_load > 0.0 and inc.load_factor < state.load_factor
             and state.load_factor - inc.load_factor > SNAP_BACK_DROP * peak_load)
-
-
-def follow_path(problem: Problem, settings: SolverSettings, initial: PathState,
-                resume: bool = False) -> Iterator[tuple[Increment, PathState]]:
-    """Preload by load control (if any), then displacement control to the target; `resume`
-    goes on from where `initial.cursor` says (an interrupted run's last converged step)."""
-    current = initial
-    cursor = initial.cursor if resume else None
-    stage = "" if cursor is None else cursor.stage
-    if problem.preload is not None and stage != "control":
-        for inc, current in _advance(problem, settings, initial, 1.0, None,
-                                     1.0 / settings.preload_increments, "preload", cursor):
-            yield inc, current
-        cursor = None
-    preload = 1.0 if problem.preload is not None else 0.0
-    yield from _advance(problem, settings, current, settings.target, preload,
-                        settings.increment, "control", cursor)

@@ -168,8 +168,7 @@ def drop_step(problem: Problem, settings: SolverSettings, state: PathState, cont
                   "norm %.3e, moved %.3e", k, inverse_step, inc.iterations, inc.load_factor,
                   static, moved)
         if static <= settings.tolerance_load and moved <= settings.tolerance_displacement:
-            inc.load_norm = static
-            return _ended(inc, iterations, k, state), inverse_step
+            return _ended(replace(inc, load_norm=static), iterations, k, state), inverse_step
         if static <= CHECK_AT * settings.tolerance_load and k >= next_check:
             next_check = k + CHECK_EVERY
             final = _static_step(problem, check, sub, control, preload, k)
@@ -292,6 +291,5 @@ def _moving_origin(control, state: PathState, step: float,
 def _ended(inc: Increment, iterations: int, substep: int, start: PathState) -> Increment:
     log.info("drop at a fixed deflection: %d sub-steps, %d iterations, load factor %.6g -> "
              "%.6g", substep + 1, iterations, start.load_factor, inc.load_factor)
-    inc.iterations = iterations
-    inc.forensics["drop_substeps"] = [substep + 1]
-    return inc
+    return replace(inc, iterations=iterations,
+                   forensics={**inc.forensics, "drop_substeps": [substep + 1]})

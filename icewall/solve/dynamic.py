@@ -310,7 +310,7 @@ class _Drop:
         end = _ended(self.current, static, self.iterations, self.steps, self.time,
                      self.energy, self.start)
         if not self._stable(end):  # (the motion may have left the branch it was called on)
-            end.forensics["tested_rest"] = [1]
+            end = replace(end, forensics={**end.forensics, "tested_rest": [1]})
         return end
 
     def _resting(self) -> float | None:
@@ -396,8 +396,6 @@ def _ended(inc: Increment, static: float, iterations: int, steps: int, time: flo
              "largest kinetic energy %.4g N mm, numerical dissipation %.4g N mm", steps, time,
              iterations, start.load_factor, inc.load_factor, energy.largest_kinetic,
              energy.numerical)
-    inc.iterations, inc.load_norm = iterations, static
-    inc.forensics["time_steps"] = [steps]
-    inc.forensics["drop_duration_us"] = [int(round(time * 1e6))]
-    inc.path_energy = energy
-    return inc
+    return replace(inc, iterations=iterations, load_norm=static, path_energy=energy,
+                   forensics={**inc.forensics, "time_steps": [steps],
+                              "drop_duration_us": [int(round(time * 1e6))]})

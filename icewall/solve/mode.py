@@ -19,7 +19,7 @@ from icewall.solve.state import Increment
 from icewall.solve.steps import StepSizeController
 
 if TYPE_CHECKING:
-    from icewall.solve.path import _Path
+    from icewall.solve.newton_stages import _Path
     from icewall.solve.settings import SolverSettings
 
 log = logging.getLogger(__name__)
@@ -85,7 +85,7 @@ class Mode:
                     f"control {current:.4g} (snap-back control, step {self.release:.3g})")
         step = self.size if self.name == "displacement" else steps.smallest
         if self.name == "drop" and (settings.scheme.drop_held == "stroke"
-                                    or problem.mass is not None):
+                                    or settings.scheme.inertia):
             # a dynamic drop holds the stroke, the jack loads' work-conjugate displacement:
             # a point elsewhere held through them is no constraint a loading system applies
             # (its force does not act along its gradient), and such a drop runs away
@@ -151,15 +151,17 @@ class Mode:
             self._switch("drop", where)
 
     def after_success(self, inc: Increment, d_deflection: float, d_load: float,
-                      steps: StepSizeController, settings: SolverSettings) -> None:
+                      steps: StepSizeController, settings: SolverSettings) -> bool:
         """Size the next step, and leave a snap-back control once load and deflection rise
-        together again."""
+        together again; whether the step is a snap-back (a drop, or a traced step whose
+        deflection turned back)."""
         self.peak = max(self.peak, abs(inc.load_factor))
+        snap_back = False
         if self.name == "drop":
-            inc.snap_back, self.name = True, "displacement"
+            snap_back, self.name = True, "displacement"
             self.slope = d_load / d_deflection if d_deflection > 0.0 else math.nan
         elif self.name == "opening":
-            inc.snap_back = d_deflection < 0.0
+            snap_back = d_deflection < 0.0
             growth = math.sqrt(settings.scheme.target_iterations / max(inc.iterations, 1))
             self.release *= min(2.0, max(0.5, growth))
             if abs(inc.load_factor) <= settings.tolerance_load * self.peak:
@@ -190,6 +192,7 @@ class Mode:
             # slope stays the secant of the step before it: the bound, and not the noise of
             # a load change within the tolerance over a tiny step)
             self.size = 0.5 * (self.ceiling - inc.control_displacement)
+        return snap_back
 
     def _switch(self, name: str, where: str) -> None:
         self.name = name

@@ -15,6 +15,7 @@ from icewall.model.materials import MaterialGroup
 from icewall.model.structure import Evaluation, Structure
 from icewall.solve.checkpoint import restore_checkpoint, take_checkpoint
 from icewall.solve.energy import EnergyAccount, secant_elastic_energy
+from icewall.solve.path import follow_path
 from icewall.solve.problem import build_problem
 from icewall.solve.settings import solver_settings
 from icewall.solve.state import Increment, PathState
@@ -89,7 +90,7 @@ def run_nonlinear(model: Model, resume: dict[str, np.ndarray] | None = None,
     previous_u = start.u
     previous_load = start.load_factor * model.reference_load + start.preload_factor * preload
     energy.dynamic = problem.mass is not None
-    for inc, path in settings.scheme.follow(problem, settings, start, resume=resume is not None):
+    for inc, path in follow_path(problem, settings, start, resume=resume is not None):
         ev = inc.evaluation
         load = inc.load_factor * model.reference_load + inc.preload_factor * preload
         if inc.path_energy is not None:  # a dynamic drop: its terms over its time steps

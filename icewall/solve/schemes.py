@@ -21,14 +21,16 @@ import numpy as np
 
 from icewall.deck.analysis_options import CONVERGED_TOLERANCE
 from icewall.schemes import NEWTON, SECANT, SchemeDeclaration
-from icewall.solve import control, path
+from icewall.solve.control import SecantStage
+from icewall.solve.newton_stages import NewtonControl, NewtonPreload
 from icewall.solve.problem import newton_constraints, wall_mass
 
 
 class _Declared:
-    """A scheme's name and defaults, from its declaration (icewall.schemes)."""
+    """A scheme's name and defaults, from its declaration (icewall.schemes), and its stages."""
 
     declaration: ClassVar[SchemeDeclaration]
+    inertia: ClassVar[bool] = False  # its drops move the wall's mass (Problem.mass)
 
     @property
     def name(self) -> str:
@@ -38,6 +40,10 @@ class _Declared:
     def defaults(self):
         """The limits a deck leaves out (analysis.tolerance_*, max_iterations, max_step_cuts)."""
         return self.declaration.defaults
+
+    def stages(self, problem) -> tuple[str, ...]:
+        """The stages of the path (solve.path): the preload where there is one, the control."""
+        return ("preload", "control") if problem.preload is not None else ("control",)
 
 
 @dataclass(frozen=True)
@@ -75,8 +81,9 @@ class Secant(_Declared):
         """Deck settings under which the scheme is known not to converge (one line each)."""
         return []
 
-    def follow(self, problem, settings, initial, resume: bool = False):
-        return control.follow_path(problem, settings, initial, resume)
+    def stage(self, name: str, problem, settings, state, cursor=None) -> SecantStage:
+        """The stage `name` from `state` (or from where `cursor` says)."""
+        return SecantStage(name, problem, settings, state, cursor)
 
 
 @dataclass(frozen=True)
@@ -103,13 +110,16 @@ class Newton(_Declared):
         newton_constraints(constraints)
 
     def mass(self, model) -> np.ndarray | None:
-        return None
+        return wall_mass(model) if self.inertia else None
 
     def warnings(self, deck) -> list[str]:
         return newton_warnings(deck)
 
-    def follow(self, problem, settings, initial, resume: bool = False):
-        return path.follow_path(problem, settings, initial, resume)
+    def stage(self, name: str, problem, settings, state, cursor=None
+              ) -> NewtonPreload | NewtonControl:
+        """The stage `name` from `state` (or from where `cursor` says)."""
+        kind = NewtonPreload if name == "preload" else NewtonControl
+        return kind(problem, settings, state, cursor)
 
 
 @dataclass(frozen=True)
@@ -118,12 +128,10 @@ class Dynamic(Newton):
     densities, Rayleigh damping `damping_ratio` at the first mode, generalized-alpha with
     `spectral_radius`, every time step scaled by `time_step_scale`)."""
 
+    inertia: ClassVar[bool] = True
     damping_ratio: float = 0.05
     spectral_radius: float = 0.5
     time_step_scale: float = 1.0
-
-    def mass(self, model) -> np.ndarray | None:
-        return wall_mass(model)
 
 
 SCHEMES = {scheme.declaration.name: scheme for scheme in (Secant, Newton)}

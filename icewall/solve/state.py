@@ -30,9 +30,10 @@ class PathState:
     last_increment: np.ndarray | None = None
 
 
-@dataclass
+@dataclass(frozen=True)
 class Increment:
-    """A converged increment as the writer and the reporting need it."""
+    """A converged increment as the writer and the reporting need it, built complete (the
+    path's stages add their flags with dataclasses.replace)."""
 
     kind: str  # "preload" | "control"
     control_displacement: float

@@ -205,7 +205,7 @@ def test_a_path_that_no_longer_moves_stops_with_a_reason(monkeypatch):
     """Converged steps that change neither deflection nor load (a step met within the
     tolerance at once, over and over) end the run with reason "stagnation" instead of
     looping."""
-    import icewall.solve.path as path_module
+    import icewall.solve.newton_stages as path_module
     from icewall.solve.state import Increment
 
     problem, initial = newton_bar(100.0, 4)

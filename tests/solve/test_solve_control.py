@@ -8,7 +8,8 @@ from softening_bar import bar_problem, settings
 
 from icewall.errors import ConvergenceError
 from icewall.solve import control
-from icewall.solve.control import FALLBACKS, LONG_ITERATIONS, _schemes, follow_path
+from icewall.solve.path import follow_path
+from icewall.solve.recovery import FALLBACKS, LONG_ITERATIONS, fallbacks
 
 
 def analytic_softening_load(deflection, length, h, E, f_weak, failure_strain, area=10.0):
@@ -90,7 +91,7 @@ def test_fallback_schemes_on_the_smallest_step():
     last undamped with LONG_ITERATIONS times the iteration limit; tolerances and everything
     else stay the deck's."""
     base = settings(1.0, 0.1)
-    schemes, n = _schemes(base), base.max_iterations
+    schemes, n = fallbacks(base), base.max_iterations
     assert len(schemes) == FALLBACKS + 1
     assert [(s.scheme.acceleration, damp, s.scheme.iteration_secant, s.max_iterations)
             for s, damp in schemes] == [
@@ -102,9 +103,9 @@ def test_fallback_schemes_on_the_smallest_step():
             base.tolerance_load, base.tolerance_displacement)
     # a fallback that would repeat the failed iteration exactly is not tried
     assert [(s.scheme.acceleration, damp)
-            for s, damp in _schemes(settings(1.0, 0.1, acceleration="none"))
+            for s, damp in fallbacks(settings(1.0, 0.1, acceleration="none"))
             ] == [("none", True), ("aitken", True), ("none", True), ("none", False)]
-    only_long = _schemes(settings(1.0, 0.1, acceleration="aitken", iteration_secant="returned"))
+    only_long = fallbacks(settings(1.0, 0.1, acceleration="aitken", iteration_secant="returned"))
     assert [s.max_iterations for s, _ in only_long] == [n, LONG_ITERATIONS * n]
 
 

@@ -18,10 +18,10 @@ from icewall.errors import ConvergenceError, ResultError
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
 from icewall.solve.checkpoint import restore_checkpoint
-from icewall.solve.control import follow_path
 from icewall.solve.energy import EnergyAccount
 from icewall.solve.mode import Mode
 from icewall.solve.nonlinear import run_nonlinear
+from icewall.solve.path import follow_path
 from icewall.solve.state import SecantCursor, StepFailed
 
 DECKS = Path(__file__).resolve().parents[2] / "decks"
