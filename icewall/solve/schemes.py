@@ -1,7 +1,7 @@
 """The iteration schemes of the nonlinear solver, each an object chosen once from the deck
 (`scheme_of`) that owns its settings, its declaration (its name and the defaults of the limits
-a deck leaves out: `icewall.schemes`), how the problem is set up for it and the path it
-follows:
+a deck leaves out: `icewall.schemes`), how the problem is set up for it and the stages of
+the path it gives the one path-following loop (solve/path.py):
 
 - `Secant`: the thesis' secant iteration (control.py) with its relaxation and chatter damping,
   and where a smallest step fails, its fallback iterations and steps over a stall;
