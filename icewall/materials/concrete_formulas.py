@@ -25,6 +25,12 @@ NEWTON_TOLERANCE = 1e-12
 """A ray's Newton steps stop at a step (or bracket) below this times the scale."""
 NEWTON_ITERATIONS = 60
 """At most this many Newton steps on a ray (each at worst a bisection)."""
+FALLEN_RANGE = 1e-280
+"""An envelope at max |eps_iu| below this fraction of the secant line there counts as gone, not
+as fallen: the scale line / envelope would overflow (NumPy's floating-point errors in runs whose
+results were finite). Only a crack opened hundreds of decay lengths wide gets there (k_t
+|eps_iu| > 640); such a direction loads onto its envelope (nothing) instead of the scaled one,
+a step of at most its secant line's stress (0.02 MPa for a crack opened to eps_iu 0.6)."""
 ZERO_TOLERANCE = 1e-6
 """A principal stress within this of the largest counts as zero (§3.2.5 mode counts)."""
 
@@ -371,7 +377,7 @@ def scaled_envelope(stress: Any, secant: Any, at_max: Any, line_at_max: Any, sig
     of eq. 3.11 from the stress the point has (its area sigma / k, eqs. 3.26-3.30). A risen
     envelope (and a change of sign) keeps Fig. 3.12 step 6: the secant line until it meets
     the envelope (`envelope_stress`'s heal), continuous too."""
-    fallen = ~sign_change & (at_max > 0.0) & (line_at_max > at_max)
+    fallen = ~sign_change & (at_max > FALLEN_RANGE * line_at_max) & (line_at_max > at_max)
     scale = select(fallen, line_at_max / select(fallen, at_max, 1.0), 1.0)
     return scale * stress, select(fallen, clip(scale * secant, floor * E0, E0), secant)
 

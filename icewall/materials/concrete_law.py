@@ -46,7 +46,7 @@ class ConcreteLaw(MaterialLaw):
     def update(self, strain: np.ndarray, state: ConcreteState, frozen: np.ndarray | None = None,
                returned_secant: bool = False, tangent: bool = False) -> Update:
         """`returned_secant`: E_i no stiffer than the secant of the returned stress (a
-        fallback of the solver, solve.control._schemes)."""
+        fallback of the solver, solve.recovery.fallbacks)."""
         p, formulation = self.params, self.formulation
         if tangent:
             if frozen is not None:
@@ -130,7 +130,7 @@ def floored_moduli(state: Any, params: Any, formulation: str, floor: float,
     eq. 3.21 G12, near zero) would otherwise leave the secant stiffness matrix nearly singular
     and the iteration wandering through near-mechanisms. `returned_secant`: E_i no stiffer than
     the secant of the stress the update returned (concrete.matrix_secant; a fallback of the
-    solver, solve.control._schemes).
+    solver, solve.recovery.fallbacks).
     """
     E0, nu0 = float(params.E0), float(params.nu0)
     secant = matrix_secant(state) if returned_secant else state.secant_modulus

@@ -250,7 +250,7 @@ def principal_moduli(trial_state: ConcreteState, state: ConcreteState, params: A
             secant, by_eps, by_strength = scaled_slopes(
                 eps_u[rows], strength, peak_strain, here, secant, by_eps, by_strength,
                 state.max_equivalent_uniaxial_strain[rows], E[rows], sign_change[rows],
-                params, rows)
+                params, rows, loading[rows])
         heal = ~sign_change[rows] & (secant > E[rows])  # loads along its secant: s = trial
         on_envelope = loading[rows] & ~heal
         loaded = ((by_eps / E[rows])[:, :, None] * np.eye(3)

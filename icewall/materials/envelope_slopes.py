@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from icewall.materials.concrete import _envelope, _point_column
-from icewall.materials.concrete_formulas import scaled_envelope
+from icewall.materials.concrete_formulas import FALLEN_RANGE, scaled_envelope
 from icewall.materials.uniaxial import SECANT_FLOOR
 
 
@@ -62,17 +62,20 @@ def envelope_slopes(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.nda
 def scaled_slopes(eps_u: np.ndarray, strength: np.ndarray, peak_strain: np.ndarray,
                    here: np.ndarray, secant: np.ndarray, by_eps: np.ndarray,
                    by_strength: np.ndarray, max_eps_u: np.ndarray, E: np.ndarray,
-                   sign_change: np.ndarray, params: Any, rows: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   sign_change: np.ndarray, params: Any, rows: np.ndarray,
+                   loading: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(secant, slope in |eps_iu|, slope in |sigma_ic|) of the envelope scaled through the
     committed point (`fallen_strength: scaled`, concrete_formulas.scaled_envelope): s = c
-    sigma_env(eps), c = E_i max / sigma_env(max), both envelopes moving with sigma_ic."""
+    sigma_env(eps), c = E_i max / sigma_env(max), both envelopes moving with sigma_ic. Only the
+    `loading` directions are scaled (the others' slopes are not used): far down a branch the
+    envelope at max |eps_iu| underflows, and its quotient would overflow for nothing."""
     signed_max = np.copysign(max_eps_u, eps_u)
     at_max, _ = _envelope(signed_max, strength, peak_strain, params, rows)
+    at_max = np.where(loading, at_max, 0.0)  # 0: not fallen, the envelope as it is
     line = E * max_eps_u
     _, scaled_secant = scaled_envelope(here, secant, at_max, line, sign_change, SECANT_FLOOR,
                                        _point_column(params.E0, rows))
-    fallen = ~sign_change & (at_max > 0.0) & (line > at_max)
+    fallen = ~sign_change & (at_max > FALLEN_RANGE * line) & (line > at_max)
     at_max_safe = np.where(fallen, at_max, 1.0)
     scale = np.where(fallen, line / at_max_safe, 1.0)
     _, by_strength_at_max = envelope_slopes(signed_max, strength, peak_strain, params, rows)
