@@ -150,10 +150,11 @@ class _Drop:
         self.control, self.held_from = control, control.measure(state.u)
         self.ramp_time = RAMP_PERIODS * self.period
         # the drop's displacement scale before it has moved: the state scaled to the advance
-        # of the held quantity (from rest, the error estimate is of the order of the motion)
-        self.reference = float(np.linalg.norm(state.u)) * abs(
-            control.target - self.held_from) / max(abs(self.held_from), abs(control.target),
-                                                    1e-300)
+        # of the held quantity (from rest, the error estimate is of the order of the motion),
+        # and at least that advance (from zero, the motion and the error both grow with dt^2)
+        advance = abs(control.target - self.held_from)
+        self.reference = max(float(np.linalg.norm(state.u)) * advance / max(
+            abs(self.held_from), abs(control.target), 1e-300), advance)
         if state.evaluation is None:  # resumed from a checkpoint: its stresses and strains
             state = replace(state, evaluation=problem.structure.evaluate(state.u, state.states))
             self.start = state
@@ -185,8 +186,14 @@ class _Drop:
         end = step.motion(inc.u)
         moved = max(float(np.linalg.norm(inc.u - self.start.u)), self.reference)
         ratio = step.local_error(end.a) / max(self.tolerance * moved, 1e-300)
-        if ratio > 1.0 and self.dt > SMALLEST_STEP * self.period:
+        if ratio > 1.0:
             c.rollback()
+            if self.dt <= SMALLEST_STEP * self.period:
+                raise StepFailed(f"dynamic drop: the local error of a time step of "
+                                 f"{self.dt:.3g} s (at most {SMALLEST_STEP:g} of the first "
+                                 f"period) is {ratio:.3g} times its tolerance at t = "
+                                 f"{self.time:.4g} s: the displacements jump, and no shorter "
+                                 f"step resolves a jump", "non-convergence")
             self.dt *= max(0.25, 0.9 * ratio ** (-1.0 / 3.0))
             return False
         c.commit()

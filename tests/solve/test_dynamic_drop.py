@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -16,11 +17,14 @@ from softening_bar import SofteningLaw, SofteningParams
 from test_newton import dynamic_settings, newton_bar, newton_settings
 
 import icewall.solve.dynamic as dynamic
+import icewall.solve.newton as newton
 from icewall.fem.mass import lumped_mass_vector
 from icewall.model.materials import MaterialGroup
 from icewall.model.structure import Structure
 from icewall.solve.controls import DisplacementControl
+from icewall.solve.integrator import GeneralizedAlpha, Motion, TimeStep
 from icewall.solve.path import follow_path
+from icewall.solve.state import StepFailed
 
 LENGTH, H, E, F, EPS_F, AREA = 1000.0, 100.0, 30000.0, 0.9 * 3.0, 0.0003, 10.0
 RESIDUAL = 0.3  # sigma_r / f of the weak element
@@ -226,3 +230,41 @@ def test_a_time_step_never_grows_past_a_twentieth_of_the_first_period(scale):
         sizes.append(drop.dt)
     assert max(sizes) == pytest.approx(scale * dynamic.LARGEST_STEP * dynamics.period)
     assert np.all(np.abs(drop.motion.u) == 0.0)
+
+
+def test_a_time_step_whose_error_does_not_fall_with_it_fails_the_drop(monkeypatch):
+    # a jump of the displacements (a pair committed penetrating and pulled shut by the next
+    # step) has a local error independent of the step; the steps shrank to 1e-6 of the period
+    # and the one taken there was accepted (TF-1 at 14.98 mm: 5e9 N mm put into motion). Now
+    # the drop fails there, saying why.
+    problem, initial = massive_bar(residual=False)
+    settings = dynamic_settings(0.15, 0.02, cuts=3, trace=False)
+    dynamics = dynamic.drop_dynamics(problem, settings, omega=2.0 * np.pi * 1000.0)
+    drop = dynamic._Drop(problem, settings, initial,
+                         DisplacementControl(problem.control_equation, 0.0), 0.0, dynamics)
+    monkeypatch.setattr(TimeStep, "local_error", lambda self, a1: 1e-3)  # mm, any step
+    with pytest.raises(StepFailed, match="no shorter step resolves a jump"):
+        for _ in range(200):
+            assert not drop.advance()
+    assert drop.steps == 0 and drop.dt <= dynamic.SMALLEST_STEP * dynamics.period
+
+
+def test_a_time_step_holds_the_gaps_of_its_pairs_to_its_own_motion():
+    # a static step holds a changed pair's gap to 1e-4 of the displacements (eq. 4.4), a time
+    # step to 1e-4 of its own motion: TF-1's pair committed 0.011 mm deep passed the first
+    # (the displacements' norm was above 110 mm) and was pulled shut by the next time step
+    u0, u1 = np.full(4, 60.0), np.full(4, 60.0) + np.array([0.01, -0.01, 0.0, 0.0])
+    start, current = SimpleNamespace(u=u0), SimpleNamespace(u=u1)
+    motion = Motion(u0, np.zeros(4), np.zeros(4))
+    step = TimeStep(np.ones(4), np.zeros(4), 1e-5, GeneralizedAlpha(0.5), motion, np.zeros(4))
+    assert newton._gap_scale(start, current, None) == pytest.approx(120.0, rel=1e-3)
+    assert newton._gap_scale(start, current, step) == pytest.approx(0.01 * np.sqrt(2))
+    gap = 0.011
+    constraints = SimpleNamespace(constraint_residuals=lambda u: (gap, 0.0))
+    problem, settings = SimpleNamespace(constraints=constraints), SimpleNamespace(
+        tolerance_displacement=1e-4, tolerance_load=1e-4)
+    current.scale = 1.0
+    assert newton._constraints_hold(problem, settings, current,
+                                    newton._gap_scale(start, current, None))
+    assert not newton._constraints_hold(problem, settings, current,
+                                        newton._gap_scale(start, current, step))
