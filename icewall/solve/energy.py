@@ -9,21 +9,23 @@ work 1/2 (s0 + s1) : (e1 - e0) dV, the friction of the slipping pairs. A dynamic
 from the step's own work identity. Its residual (solve/integrator.py), converged to e (the
 Newton unbalance, restricted to the free equations), is
 
-    (1-af) e = (1-af) r1 + af r0 - (1-am) M a1 - am M a0 - (1-af) C v1 - af C v0,
+    (1-af) e = (1-af) s1 + af s0 - G lam - (1-am) M a1 - am M a0 - (1-af) C v1 - af C v0,
 
-r = P R + F - f_int(u) - G lam the static unbalance (applied minus resisting forces; r0 the
-one the step's history carried: zero at the drop's first step, where it starts from a static
-equilibrium). Dotted with the step's du = u1 - u0:
+s = P R + F - f_int(u) the unbalance without the gap forces (applied minus resisting forces),
+G lam the gap forces, which the step carries at its end only (solve/dynamic.py: lam the
+multipliers scaled to the end after the commit; a pair opening in the step is not pushed apart
+by its old compression, nor a slip that reverses by its old friction). Dotted with the step's
+du = u1 - u0:
 
-    W_inertia + W_damping + W_static = -(1-af) e . du  (~ 0, the Newton tolerance),
+    W_inertia + W_damping + W_static + G lam . du = -(1-af) e . du  (~ 0, the Newton tolerance),
     W_inertia = [(1-am) M a1 + am M a0] . du,
     W_damping = [(1-af) C v1 + af C v0] . du,
-    W_static  = -[(1-af) r1 + af r0] . du,
+    W_static  = -[(1-af) s1 + af s0] . du,
 
 each with the scheme's weights. The physical account weighs every force 1/2, 1/2 instead:
 external work E = (1/2 (P0 + P1) R + F) . du, stress work I = 1/2 (f_int0 + f_int1) . du (the
 groups' trapezoidal stress work, the same sum: eps = B u), damping D = 1/2 C (v0 + v1) . du,
-and the kinetic energy T = 1/2 v M v. With q = C v - r (the damping less the static unbalance)
+and the kinetic energy T = 1/2 v M v. With q = C v - s (the damping less the unbalance)
 the numerical dissipation of the step is
 
     N = (W_inertia - (T1 - T0)) + (1/2 - af) (q1 - q0) . du,
@@ -32,13 +34,12 @@ the inertia's algorithmic dissipation (the scheme's inertia work less the change
 energy) plus the difference between the af-weighted and the trapezoidal work of the other
 forces. Then, exactly,
 
-    E = I + Fr + D + (T1 - T0) + N + [(1-af) e . du + (1/2 G (lam0 + lam1) . du - Fr)],
+    E = I + Fr + D + (T1 - T0) + N + [(1-af) e . du + (G lam . du - Fr)],
 
 the bracket being the imbalance the step leaves: the equilibrium tolerance times du and the
-gap forces' trapezoidal work against the friction booked (Fr, interface.gap's estimate over
-the pairs slipping at the step's end; the two differ where pairs open, close, stick or slip
-within the step); at the drop's first step also 1/2 r0 . du of the start's own unbalance
-(within the tolerance), which the step took as zero. The stress work stays the trapezoidal
+gap forces' work against the friction booked (Fr = |lam_T| |dDelta_T| over the pairs slipping
+at the step's end; the two differ where pairs close in the step, an impact's loss, or a slip
+turns within it). The stress work stays the trapezoidal
 estimate of the integral of sigma : d eps (the concrete's dissipation is that less its
 stored secant energy); N is the integrator's, not the wall's.
 With af = am = 1/2 (rho_inf = 1: the trapezoidal rule, gamma = 1/2, beta = 1/4) du = dt (v0 +
@@ -126,7 +127,8 @@ class DropEnergy:
     """Work terms of one drop summed over its time steps (N mm): the physical ones, the
     integrator's numerical dissipation (`numerical`, the module's N) and, as a check that is no
     part of the account, the work of the Newton unbalance the time steps converged to
-    (`unbalance`, the module's (1-af) e . du)."""
+    (`unbalance`, the module's (1-af) e . du, with the gap forces' work G lam . du where there
+    are pairs)."""
 
     external: float = 0.0
     internal: dict[str, float] = field(default_factory=dict)
@@ -140,13 +142,16 @@ class DropEnergy:
 
     def add(self, problem: Problem, before: Increment | PathState, after: Increment,
             step: TimeStep, motion: Motion, F_pre: np.ndarray, unbalance_before: np.ndarray,
-            unbalance_after: np.ndarray) -> None:
+            unbalance_after: np.ndarray, friction: float | None = None) -> None:
         """A committed time step: the trapezoidal work of the loads, the stresses and the
         damping, the friction work and the kinetic energy at its end; and from the step's
         work identity (module docstring) the integrator's numerical dissipation.
-        `unbalance_before`, `unbalance_after`: the static unbalances r0 (the one the step's
-        history carried) and r1 (at its converged state), equation space."""
-        self._static_terms(problem, before, after, F_pre)
+        `unbalance_before`, `unbalance_after`: the unbalances without the gap forces s0 (the
+        one the step's history carried) and s1 (at its converged state), equation space;
+        `friction`: the step's friction work at its end forces (None: the constraints')."""
+        self._static_terms(problem, before, after, F_pre, friction=friction is None)
+        if friction is not None:
+            self.friction += friction
         du = after.u - before.u
         start, s = step.start, step.scheme
         v_mean = 0.5 * (start.v + motion.v)

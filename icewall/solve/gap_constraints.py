@@ -89,6 +89,14 @@ class GapConstraints(SupportConstraints):
     def rollback(self) -> None:
         self.state = self.committed
 
+    def scale_multipliers(self, factor: float) -> GapState:
+        """Scale the committed multipliers (a time step's solved ones to its end forces,
+        solve.dynamic) and return the committed state."""
+        s = self.committed
+        self.committed = self.state = replace(s, lam_N=factor * s.lam_N,
+                                              lam_T=factor * s.lam_T)
+        return self.committed
+
     def constraint_force(self) -> np.ndarray:
         return interface_forces(self.C, self.state)
 

@@ -268,3 +268,48 @@ def test_a_time_step_holds_the_gaps_of_its_pairs_to_its_own_motion():
                                     newton._gap_scale(start, current, None))
     assert not newton._constraints_hold(problem, settings, current,
                                         newton._gap_scale(start, current, step))
+
+
+def test_a_time_step_carries_its_gap_forces_at_its_end():
+    # generalized-alpha weighs the forces af at the start and 1 - af at the end; the gap
+    # forces, carried so, push a pair that opens in the step apart with af of its old
+    # compression, and a slip that reverses along with af of its old friction (TF-1's and
+    # CF-4's drops made up to 9 % of the external work). The history carries the start's
+    # unbalance without them, the multipliers solved (lam / (1 - af) of the end force) are
+    # scaled to the end's, and the friction is booked at the end force.
+    from icewall.interface.gap import FIXED, FREE, SLIP, GapState
+
+    problem, initial = massive_bar(residual=False)
+    u = np.linspace(0.0, 0.01, len(initial.u))
+    state = SimpleNamespace(load_factor=3.0, evaluation=problem.structure.evaluate(
+        u, initial.states))
+    pairs = SimpleNamespace(constraint_force=lambda: np.full(len(u), 1e6),
+                            restrict=problem.constraints.restrict)
+    s = dynamic._structural_unbalance(replace(problem, constraints=pairs), state,
+                                      np.zeros(len(u)))
+    applied = 3.0 * problem.reference_load - state.evaluation.internal_force
+    assert s == pytest.approx(problem.constraints.restrict(applied))  # no gap force in it
+
+    n = 3
+    def gap_state(kind, lam_T, gap_T):
+        return GapState(np.array(kind, dtype=np.int8), np.full(n, -10.0), np.array(lam_T),
+                        np.zeros(n), np.array(gap_T), np.zeros(n), np.zeros(n, bool))
+
+    before = gap_state([FIXED, SLIP, FREE], [0.0, 4.0, 0.0], [0.0, 1.0, 0.0])
+    solved = gap_state([SLIP, SLIP, FREE], [-6.0, 6.0, 0.0], [-0.5, 1.25, 0.3])
+
+    class Pairs:
+        committed = state = solved
+
+        def scale_multipliers(self, factor):
+            self.committed = self.state = replace(self.committed,
+                                                  lam_N=factor * self.committed.lam_N,
+                                                  lam_T=factor * self.committed.lam_T)
+            return self.committed
+
+    c = Pairs()
+    work = dynamic._end_friction(c, before, 2.0 / 3.0)
+    assert c.committed.lam_T == pytest.approx([-4.0, 4.0, 0.0])
+    assert c.committed.lam_N == pytest.approx(np.full(n, -20.0 / 3.0))
+    assert work == pytest.approx(4.0 * 0.5 + 4.0 * 0.25)  # |lam_T| |dDelta_T|, slipping pairs
+    assert dynamic._end_friction(SimpleNamespace(), None, 2.0 / 3.0) == 0.0  # supports only
