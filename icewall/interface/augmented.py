@@ -64,9 +64,11 @@ def prescribed_increments(state: GapState, mu: float) -> np.ndarray:
 
 
 def constraint_targets(C: sp.spmatrix, u: np.ndarray, state: GapState) -> np.ndarray:
-    """Right-hand sides (2n,) target - C u of the rows (normal target 0, tangential stick_T)."""
+    """Right-hand sides (2n,) target - C u of the rows (normal target hold_N, zero where None;
+    tangential stick_T)."""
     gap_N, gap_T = relative_displacement(C, u)
-    return np.column_stack([-gap_N, state.stick_T - gap_T]).ravel()
+    normal = -gap_N if state.hold_N is None else state.hold_N - gap_N
+    return np.column_stack([normal, state.stick_T - gap_T]).ravel()
 
 
 def implicit_slip_rows(state: GapState) -> np.ndarray:

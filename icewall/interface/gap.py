@@ -58,6 +58,10 @@ class GapState:
     # iterate at which the pair last started to slip
     step_T: np.ndarray | None = None
     transitions: dict[str, int] = field(default_factory=dict)  # of the last update/new_step
+    # (n,) Delta_N at which a FIXED/SLIP pair is held (the total target of its C_N row): None,
+    # zero (contact), except in a time step, which holds the pairs closed at its start at the
+    # gap they had (`hold_start_gaps`)
+    hold_N: np.ndarray | None = None
 
     @classmethod
     def initial(cls, n_pairs: int, permanent: np.ndarray | None = None) -> GapState:
@@ -238,8 +242,19 @@ def new_step(state: GapState, reset_slip: bool = True) -> GapState:
     reset = (state.state == SLIP) & reset_slip
     new = np.where(reset | state.permanent, FIXED, state.state).astype(np.int8)
     stick_T = np.where(reset, state.gap_T, state.stick_T)
-    return replace(state, state=new, stick_T=stick_T, step_T=state.gap_T.copy(),
+    return replace(state, state=new, stick_T=stick_T, step_T=state.gap_T.copy(), hold_N=None,
                    transitions={"slip->fixed (new step)": int(np.count_nonzero(reset))})
+
+
+def hold_start_gaps(state: GapState) -> GapState:
+    """The state of a time step's start with each pair held there at the normal gap it has
+    (zero for the open ones): the residual gap a static step leaves a closed pair (eq. 4.4's
+    tolerance, up to 1e-4 of the displacements) is no target the motion must reach. Pulled
+    shut within a time step it moves the pair's nodes by that gap whatever the step's length,
+    a jump no shorter step resolves (CF-14 at 6.7 mm, CF-7 at 18.1 mm: docs/solver.md item 49).
+    Moreau's contact conditions on the velocities leave it so."""
+    closed = state.state != FREE
+    return replace(state, hold_N=np.where(closed, state.gap_N, 0.0))
 
 
 def count_states(state: GapState) -> dict[str, int]:

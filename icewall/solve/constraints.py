@@ -67,7 +67,7 @@ class SupportConstraints:
         self.fixed = np.asarray(fixed, dtype=int)
 
     # --- state over a step -------------------------------------------------------------
-    def begin_step(self) -> None:
+    def begin_step(self, time_step: bool = False) -> None:
         """Start a new increment from the committed state."""
 
     def commit(self) -> None:

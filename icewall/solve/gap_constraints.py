@@ -27,6 +27,7 @@ from icewall.interface.gap import (
     count_states,
     fixed_point_mask,
     friction_work_increment,
+    hold_start_gaps,
     new_step,
     relative_displacement,
     settle_cycling_pairs,
@@ -78,8 +79,12 @@ class GapConstraints(SupportConstraints):
         self._pattern: AugmentedPattern | None = None  # built from the first stiffness
         self._checked_states = b""  # pair states of the last pivot-checked matrix
 
-    def begin_step(self) -> None:
+    def begin_step(self, time_step: bool = False) -> None:
+        """The pair states of a new step; a time step holds its closed pairs at their gaps
+        (interface.gap.hold_start_gaps)."""
         self.state = new_step(self.committed, reset_slip=self.reset_slip)
+        if time_step:
+            self.state = hold_start_gaps(self.state)
         self.changes_in_step = np.zeros(self.n_pairs, dtype=int)
 
     def commit(self) -> None:
@@ -191,7 +196,8 @@ class GapConstraints(SupportConstraints):
         cycling = self.changes_in_step >= CYCLE_TOGGLES
         if not cycling.any():
             return new
-        return settle_cycling_pairs(old, new, cycling, gap_N, gap_T, self.mu,
+        held = gap_N if old.hold_N is None else gap_N - old.hold_N  # against the row's target
+        return settle_cycling_pairs(old, new, cycling, held, gap_T, self.mu,
                                     self.augmentation)
 
     def counts(self) -> dict[str, int]:

@@ -313,3 +313,52 @@ def test_a_time_step_carries_its_gap_forces_at_its_end():
     assert c.committed.lam_N == pytest.approx(np.full(n, -20.0 / 3.0))
     assert work == pytest.approx(4.0 * 0.5 + 4.0 * 0.25)  # |lam_T| |dDelta_T|, slipping pairs
     assert dynamic._end_friction(SimpleNamespace(), None, 2.0 / 3.0) == 0.0  # supports only
+
+
+def test_an_increment_is_converged_only_where_its_pair_targets_hold():
+    # a pair that closed in a time step's first iteration and whose row's correction a line
+    # search then shortened was taken 0.113 mm deep with no state change in the last
+    # iteration (CF-14 at 6.7 mm), and the next time step pulled it shut: a jump. The targets
+    # are tested at every converged iterate, not only after state changes.
+    from icewall.solve.constraints import SupportConstraints
+
+    class ShortRows(SupportConstraints):
+        def constraint_residuals(self, u):
+            return 1.0, 0.0  # a row 1 mm short of its target, whatever the iterate
+
+    problem, initial = newton_bar(100.0, 5, strength=1e9)
+    c = problem.constraints
+    short = replace(problem, constraints=ShortRows(c.n_equations, c.fixed))
+    control = DisplacementControl(problem.control_equation, 0.01)
+    settings = newton_settings(0.01, 0.01, tolerance=1e-6)
+    assert newton.newton_increment(problem, settings, initial, control, 0.0).iterations == 1
+    with pytest.raises(StepFailed):
+        newton.newton_increment(short, settings, initial, control, 0.0)
+
+
+def test_a_time_step_holds_its_closed_pairs_at_the_gaps_they_have():
+    # a static step leaves a closed pair's gap within eq. 4.4's tolerance (up to 1e-4 of the
+    # displacements); a time step that pulled it shut would move its nodes by that gap
+    # whatever its length (CF-7's drop at 18.13 mm failed so at its first time step): it
+    # holds each pair closed at its start at the gap it has, the open ones at zero
+    from icewall.interface.augmented import constraint_targets
+    from icewall.interface.gap import (
+        FIXED,
+        FREE,
+        SLIP,
+        GapState,
+        hold_start_gaps,
+        new_step,
+    )
+
+    C = np.eye(6)  # three pairs, rows (N, T) on their own relative displacements
+    u = np.array([-0.01, 0.2, 0.3, 0.0, 0.02, 0.1])  # gap_N -0.01, 0.3, 0.02
+    n = 3
+    state = GapState(np.array([FIXED, FREE, SLIP], np.int8), np.full(n, -5.0), np.zeros(n),
+                     u[0::2].copy(), u[1::2].copy(), u[1::2].copy(), np.zeros(n, bool))
+    static = constraint_targets(C, u, state)[0::2]
+    assert static == pytest.approx([0.01, -0.3, -0.02])  # a static step closes them
+    held = hold_start_gaps(state)
+    assert held.hold_N == pytest.approx([-0.01, 0.0, 0.02])
+    assert constraint_targets(C, u, held)[0::2] == pytest.approx([0.0, -0.3, 0.0])
+    assert new_step(held).hold_N is None  # the next step, static, closes them again
