@@ -246,6 +246,22 @@ def new_step(state: GapState, reset_slip: bool = True) -> GapState:
                    transitions={"slip->fixed (new step)": int(np.count_nonzero(reset))})
 
 
+def end_forces(state: GapState, end_share: float) -> GapState:
+    """A time step's pair state with its multipliers at the step's end forces: solved with the
+    af-weighted equation of motion, they are those forces over end_share = 1 - af
+    (solve.energy.structural_unbalance)."""
+    return replace(state, lam_N=end_share * state.lam_N, lam_T=end_share * state.lam_T)
+
+
+def end_friction_work(state_old: GapState, state_new: GapState) -> float:
+    """Friction work (N mm) of a time step at its end forces, sum |lam_T| |dDelta_T| over the
+    pairs SLIP in `state_new` (the work a slip rule makes non-negative; the trapezoidal
+    `friction_work_increment` would carry the start's force of a slip that reverses)."""
+    slipping = state_new.state == SLIP
+    return float(np.sum(np.abs(state_new.lam_T[slipping])
+                        * np.abs(state_new.gap_T[slipping] - state_old.gap_T[slipping])))
+
+
 def hold_start_gaps(state: GapState) -> GapState:
     """The state of a time step's start with each pair held there at the normal gap it has
     (zero for the open ones): the residual gap a static step leaves a closed pair (eq. 4.4's

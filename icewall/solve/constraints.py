@@ -73,6 +73,10 @@ class SupportConstraints:
     def commit(self) -> None:
         """Accept the current iterate as converged."""
 
+    def commit_time_step(self, end_share: float) -> None:
+        """Accept a converged time step (end_share = 1 - af: `GapConstraints`')."""
+        self.commit()
+
     def rollback(self) -> None:
         """Return to the committed state (a cut step)."""
 

@@ -43,8 +43,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from icewall.errors import ConvergenceError
-from icewall.interface.gap import SLIP
-from icewall.solve.energy import DropEnergy
+from icewall.solve.energy import DropEnergy, structural_unbalance
 from icewall.solve.imperfection import Seed
 from icewall.solve.integrator import Dynamics, GeneralizedAlpha, Motion, TimeStep, ramp
 from icewall.solve.newton import newton_increment, static_load_norm
@@ -202,16 +201,11 @@ class _Drop:
                                  f"step resolves a jump", "non-convergence")
             self.dt *= max(0.25, 0.9 * ratio ** (-1.0 / 3.0))
             return False
-        before = getattr(c, "committed", None)
-        c.commit()
-        # the step's gap forces act at its end: the multipliers solved with the af-weighted
-        # equation are theirs over 1 - af (`_structural_unbalance`)
-        friction = _end_friction(c, before, 1.0 - s.alpha_f)
+        c.commit_time_step(1.0 - s.alpha_f)  # its gap forces act at its end
         self.steps, self.time = self.steps + 1, self.time + self.dt
         self.iterations += inc.iterations
-        r1 = _structural_unbalance(self.problem, inc, self.F_pre)
-        self.energy.add(self.problem, self.current, inc, step, end, self.F_pre, self.r0, r1,
-                        friction)
+        r1 = structural_unbalance(self.problem, inc, self.F_pre)
+        self.energy.add(self.problem, self.current, inc, step, end, self.F_pre, self.r0, r1)
         self.r0 = r1
         self.motion, self.current = end, inc
         growth = min(2.0, max(0.5, 0.9 * max(ratio, 1e-12) ** (-1.0 / 3.0)))
@@ -399,33 +393,6 @@ def _as_state(current: Increment | PathState, start: PathState) -> PathState:
         return current
     return PathState(current.u, current.load_factor, current.evaluation.states,
                      current.evaluation, current.preload_factor, start.load_scale)
-
-
-def _structural_unbalance(problem: Problem, inc: Increment | PathState,
-                          F_pre: np.ndarray) -> np.ndarray:
-    """P R + F - f_int of a committed state (equation space, fixed rows zero): the static
-    unbalance without the gap forces. A time step carries the forces of its start weighted
-    af and those of its end 1 - af, but its gap forces at its end only (the equation's G lam1
-    is their whole force over 1 - af): a pair that opens in the step is not pushed apart by
-    its old compression, nor a pair whose slip reverses by its old friction (TF-1's and
-    CF-4's drops made up to 9 % of the external work that way, docs/solver.md item 47).
-    Backward Euler for the constraint forces, as the Moreau-Jean scheme and the nonsmooth
-    generalized-alpha take them (Acary 2016)."""
-    c = problem.constraints
-    applied = inc.load_factor * problem.reference_load + F_pre
-    return c.restrict(applied - inc.evaluation.internal_force)
-
-
-def _end_friction(constraints, before, end_share: float) -> float:
-    """Scale the committed multipliers to the step's end forces (end_share = 1 - af) and
-    return the friction work of its slipping pairs at them, |lam_T| |dDelta_T| (0 without gap
-    pairs)."""
-    scale = getattr(constraints, "scale_multipliers", None)
-    if scale is None or before is None:
-        return 0.0
-    after = scale(end_share)
-    slipping = after.state == SLIP
-    return float(np.sum((np.abs(after.lam_T) * np.abs(after.gap_T - before.gap_T))[slipping]))
 
 
 def _ended(inc: Increment, static: float, iterations: int, steps: int, time: float,

@@ -25,6 +25,8 @@ from icewall.interface.gap import (
     GapState,
     constraint_matrix,
     count_states,
+    end_forces,
+    end_friction_work,
     fixed_point_mask,
     friction_work_increment,
     hold_start_gaps,
@@ -94,13 +96,13 @@ class GapConstraints(SupportConstraints):
     def rollback(self) -> None:
         self.state = self.committed
 
-    def scale_multipliers(self, factor: float) -> GapState:
-        """Scale the committed multipliers (a time step's solved ones to its end forces,
-        solve.dynamic) and return the committed state."""
-        s = self.committed
-        self.committed = self.state = replace(s, lam_N=factor * s.lam_N,
-                                              lam_T=factor * s.lam_T)
-        return self.committed
+    def commit_time_step(self, end_share: float) -> None:
+        """Accept a converged time step: it carries its gap forces at its end, so its solved
+        multipliers are scaled to them (end_share = 1 - af) and its friction work is booked
+        at them (interface.gap.end_forces, end_friction_work)."""
+        before = self.committed
+        self.committed = self.state = end_forces(self.state, end_share)
+        self._friction_work = end_friction_work(before, self.committed)
 
     def constraint_force(self) -> np.ndarray:
         return interface_forces(self.C, self.state)

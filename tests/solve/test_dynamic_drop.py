@@ -278,6 +278,9 @@ def test_a_time_step_carries_its_gap_forces_at_its_end():
     # unbalance without them, the multipliers solved (lam / (1 - af) of the end force) are
     # scaled to the end's, and the friction is booked at the end force.
     from icewall.interface.gap import FIXED, FREE, SLIP, GapState
+    from icewall.solve.constraints import SupportConstraints
+    from icewall.solve.energy import structural_unbalance
+    from icewall.solve.gap_constraints import GapConstraints
 
     problem, initial = massive_bar(residual=False)
     u = np.linspace(0.0, 0.01, len(initial.u))
@@ -285,8 +288,7 @@ def test_a_time_step_carries_its_gap_forces_at_its_end():
         u, initial.states))
     pairs = SimpleNamespace(constraint_force=lambda: np.full(len(u), 1e6),
                             restrict=problem.constraints.restrict)
-    s = dynamic._structural_unbalance(replace(problem, constraints=pairs), state,
-                                      np.zeros(len(u)))
+    s = structural_unbalance(replace(problem, constraints=pairs), state, np.zeros(len(u)))
     applied = 3.0 * problem.reference_load - state.evaluation.internal_force
     assert s == pytest.approx(problem.constraints.restrict(applied))  # no gap force in it
 
@@ -298,21 +300,15 @@ def test_a_time_step_carries_its_gap_forces_at_its_end():
     before = gap_state([FIXED, SLIP, FREE], [0.0, 4.0, 0.0], [0.0, 1.0, 0.0])
     solved = gap_state([SLIP, SLIP, FREE], [-6.0, 6.0, 0.0], [-0.5, 1.25, 0.3])
 
-    class Pairs:
-        committed = state = solved
-
-        def scale_multipliers(self, factor):
-            self.committed = self.state = replace(self.committed,
-                                                  lam_N=factor * self.committed.lam_N,
-                                                  lam_T=factor * self.committed.lam_T)
-            return self.committed
-
-    c = Pairs()
-    work = dynamic._end_friction(c, before, 2.0 / 3.0)
+    c = SimpleNamespace(committed=before, state=solved)
+    GapConstraints.commit_time_step(c, 2.0 / 3.0)
+    work = c._friction_work
     assert c.committed.lam_T == pytest.approx([-4.0, 4.0, 0.0])
     assert c.committed.lam_N == pytest.approx(np.full(n, -20.0 / 3.0))
     assert work == pytest.approx(4.0 * 0.5 + 4.0 * 0.25)  # |lam_T| |dDelta_T|, slipping pairs
-    assert dynamic._end_friction(SimpleNamespace(), None, 2.0 / 3.0) == 0.0  # supports only
+    supports = SupportConstraints(len(u), np.array([0]))
+    supports.commit_time_step(2.0 / 3.0)
+    assert supports.friction_work_increment() == 0.0  # supports only
 
 
 def test_an_increment_is_converged_only_where_its_pair_targets_hold():
