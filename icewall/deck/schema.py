@@ -254,7 +254,7 @@ class Elastic:
                             minimum=0.0, maximum=1e-7)
 
 
-FIXED_POINT_PLACEMENTS = ("top", "corners", "bottom_support")
+FIXED_POINT_PLACEMENTS = ("top", "corners", "bottom_support", "station")
 """Where `Interface.fixed_point_placement` may put fixed pairs (icewall.interface.gap)."""
 
 
@@ -270,8 +270,9 @@ class Interface:
                                     "before it is frozen for the rest of the step (limit "
                                     "cycles); the equilibrium norms still decide convergence",
                                     minimum=1)
-    fixed_points_per_core: int = option(0, doc="permanently fixed pairs per core on its top "
-                                        "face (thesis 4.3.2's way to keep a core from "
+    fixed_points_per_core: int = option(0, doc="permanently fixed pairs per core (per face "
+                                        "of it: fixed_point_placement) (thesis 4.3.2's way to "
+                                        "keep a core from "
                                         "floating; they act as shear connectors and carry far "
                                         "more shear than friction allows)", minimum=0,
                                         maximum=10)
@@ -279,7 +280,9 @@ class Interface:
         ["top"], doc="where fixed pairs stand, any of: top (fixed_points_per_core pairs at "
         "each core's top-face mid-length), corners (every core corner at the diaphragm-plate "
         "junctions), bottom_support (fixed_points_per_core bottom-face pairs each side of "
-        "each support); thesis 4.3.2, Fig. 4.15 lost (icewall.interface.gap)")
+        "each support), station (fixed_points_per_core pairs on each core's top face and as "
+        "many on its bottom face, at its mid-length: the core held at one station); thesis "
+        "4.3.2, Fig. 4.15 lost (icewall.interface.gap)")
     stabilization: float = option(1e-6, doc="weak springs between paired nodes in the "
                                   "iteration matrix only (relative to the largest stiffness "
                                   "diagonal): keep a core whose pairs all open in an iterate "

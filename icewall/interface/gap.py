@@ -64,13 +64,20 @@ class GapState:
     hold_N: np.ndarray | None = None
 
     @classmethod
-    def initial(cls, n_pairs: int, permanent: np.ndarray | None = None) -> GapState:
-        """All pairs FIXED (perfect bond of the coincident nodes), zero forces and gaps."""
+    def initial(cls, n_pairs: int, permanent: np.ndarray | None = None,
+                separated: bool = False) -> GapState:
+        """All pairs FIXED (perfect bond of the coincident nodes), zero forces and gaps; with
+        `separated`, all but the permanent ones FREE: the concrete separated from the steel, as
+        an in-plane tension applied first makes it (thesis 4.2.2), each pair closing where it
+        would penetrate (Table 3.2's FREE -> FIXED). From the bonded state the first iterate
+        of such a tension drags the cores with the plates, and the pair states that follow
+        from it cycle (TF-5 with its cores pinned at one station: docs/solver.md item 50)."""
         zeros = np.zeros(n_pairs)
         perm = np.zeros(n_pairs, bool) if permanent is None else np.asarray(permanent, bool)
         if perm.shape != (n_pairs,):
             raise ValueError(f"permanent must be ({n_pairs},) bool, got shape {perm.shape}")
-        return cls(state=np.full(n_pairs, FIXED, np.int8), lam_N=zeros, lam_T=zeros.copy(),
+        state = np.where(perm | (not separated), FIXED, FREE).astype(np.int8)
+        return cls(state=state, lam_N=zeros, lam_T=zeros.copy(),
                    gap_N=zeros.copy(), gap_T=zeros.copy(), stick_T=zeros.copy(), permanent=perm,
                    step_T=zeros.copy())
 
@@ -350,6 +357,11 @@ def choose_fixed_points(mesh: Mesh, per_core: int = 2, tol: float = 1e-6,
     * "corners": every corner pair, i.e. the core corners at the diaphragm-plate (and end
       plate-plate) junctions; `per_core` does not apply.
     * "bottom_support": `per_core` bottom-face pairs on each side of each support.
+    * "station": per core, the `per_core` top-face pairs nearest its mid-length (as "top") and
+      as many bottom-face pairs there: the core held at one station across its depth. The
+      pins remove its three rigid-body modes (the rotation with the core's depth as lever, not
+      the 25 mm between two adjacent top pairs) and, standing at one x, take none of the
+      plates' stretch, so an in-plane tension goes through the plates (thesis 4.2.2).
     """
     if placement not in FIXED_POINT_PLACEMENTS:
         raise ValueError(f"unknown fixed-point placement {placement!r} "
@@ -358,10 +370,16 @@ def choose_fixed_points(mesh: Mesh, per_core: int = 2, tol: float = 1e-6,
         return mesh.interface_corner.astype(bool) & (_pair_cores(mesh) >= 0)
     if placement == "bottom_support":
         return _bottom_support_points(mesh, per_core, tol)
-    return _top_face_points(mesh, per_core, tol)
+    if placement == "station":
+        return (_mid_length_points(mesh, per_core, tol, top=True)
+                | _mid_length_points(mesh, per_core, tol, top=False))
+    return _mid_length_points(mesh, per_core, tol, top=True)
 
 
-def _top_face_points(mesh: Mesh, per_core: int, tol: float) -> np.ndarray:
+def _mid_length_points(mesh: Mesh, per_core: int, tol: float, top: bool) -> np.ndarray:
+    """Per core, the `per_core` pairs of its top face (normal (0, -1), under the top plate; or
+    with top=False its bottom face, normal (0, +1)) nearest its mid-length, corner pairs
+    excluded; a core without such a face falls back to its non-corner pairs."""
     pairs, normals = mesh.interface_pairs, mesh.interface_normals
     chosen = np.zeros(len(pairs), dtype=bool)
     if len(pairs) == 0:
@@ -371,16 +389,18 @@ def _top_face_points(mesh: Mesh, per_core: int, tol: float) -> np.ndarray:
     node_region[mesh.cells[concrete]] = mesh.cell_region[concrete][:, None]
     pair_region = node_region[pairs[:, 1]]
     x, y = mesh.points[pairs[:, 1]].T
-    top_face = (np.abs(normals[:, 0]) < tol) & (normals[:, 1] < 0) & ~mesh.interface_corner
+    side = -1.0 if top else 1.0
+    face = (np.abs(normals[:, 0]) < tol) & (side * normals[:, 1] > 0) & ~mesh.interface_corner
     for tag in np.unique(pair_region[pair_region >= 0]):  # loop over cores, not pairs
         core_nodes = np.flatnonzero(node_region == tag)
         on_symmetry = np.intersect1d(core_nodes, mesh.node_sets.get("symmetry", []))
         x_core = mesh.points[on_symmetry if on_symmetry.size else core_nodes, 0]
         x_mid = 0.5 * (x_core.min() + x_core.max())
         in_core = pair_region == tag
-        candidates = np.flatnonzero(in_core & top_face)
-        if candidates.size:
-            candidates = candidates[y[candidates] >= y[candidates].max() - tol]
+        candidates = np.flatnonzero(in_core & face)
+        if candidates.size:  # the face at the core's top (bottom), not a step in it
+            level = side * y[candidates]
+            candidates = candidates[level <= level.min() + tol]
         else:
             candidates = np.flatnonzero(in_core & ~mesh.interface_corner)
         order = np.lexsort((x[candidates], np.abs(x[candidates] - x_mid)))

@@ -39,6 +39,14 @@ class Model:
     measure_unit: str
     measure_factor: float  # reported load = factor * jack load P
 
+    @property
+    def separating_preload(self) -> bool:
+        """The first load is an in-plane tension (loads.preload.axial_force > 0): the plates
+        stretch away from the cores, and the concrete separates from the steel (thesis
+        4.2.2)."""
+        preload = None if self.deck is None else self.deck.loads.preload
+        return preload is not None and preload.axial_force > 0.0
+
 
 def cell_materials(deck: Deck, mesh: Mesh, materials_of_region: dict[str, str]) -> np.ndarray:
     names = np.array([materials_of_region[r.name] for r in

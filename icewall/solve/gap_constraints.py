@@ -67,7 +67,8 @@ class GapConstraints(SupportConstraints):
         free[self.fixed] = False
         on_free = abs(self.C[:, np.flatnonzero(free)]).sum(axis=1)
         self.redundant = np.asarray(on_free).ravel() == 0.0
-        self.committed = GapState.initial(self.n_pairs, permanent=permanent)
+        self.committed = GapState.initial(self.n_pairs, permanent=permanent,
+                                          separated=model.separating_preload)
         self.state = self.committed
         self._friction_work = 0.0
         self.max_changes = interface.max_state_changes

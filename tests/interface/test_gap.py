@@ -253,6 +253,33 @@ def test_fixed_points_on_the_bottom_face_next_to_the_support():
     assert inward[-1] > 690.0 and outward[0] < 810.0  # the pairs nearest the support
 
 
+def test_fixed_points_at_one_station_across_each_core():
+    """"station": per core the top-face and the bottom-face pair nearest its mid-length, at
+    the same x: two pins across the depth (TF-5's half model, four cores, one cut by the
+    symmetry line)."""
+    from icewall.deck.load import load_deck
+    from icewall.mesh.build import build_mesh
+
+    mesh = build_mesh(load_deck(Path(__file__).resolve().parents[2] / "decks" / "tf5.yaml",
+                                ()).deck)
+    chosen = choose_fixed_points(mesh, per_core=1, placement="station")
+    cores = [r for r in mesh.regions if r.kind == "concrete"]
+    assert chosen.sum() == 2 * len(cores) == 8
+    xy = mesh.points[mesh.interface_pairs[chosen, 1]]
+    normals = mesh.interface_normals[chosen]
+    top, bottom = normals[:, 1] < 0, normals[:, 1] > 0
+    assert top.sum() == bottom.sum() == len(cores)
+    np.testing.assert_allclose(np.sort(xy[top, 0]), np.sort(xy[bottom, 0]))
+    # mid-lengths of the cores 0-100 (cut by the symmetry line), 100-450, 450-625, 625-770
+    # (from the diaphragm faces, 3.2 mm each side): the pairs nearest them on a 25 mm mesh
+    np.testing.assert_allclose(np.sort(xy[top, 0]), [0.0, 275.0, 537.5, 690.0], atol=13.0)
+    assert np.allclose(xy[top, 1], xy[:, 1].max()) and np.allclose(xy[bottom, 1],
+                                                                     xy[:, 1].min())
+    # one station's top pairs are the "top" placement's
+    assert np.array_equal(chosen & (mesh.interface_normals[:, 1] < 0),
+                          choose_fixed_points(mesh, per_core=1))
+
+
 def test_fixed_point_mask_of_a_deck_combines_placements():
     from types import SimpleNamespace
 
