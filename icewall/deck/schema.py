@@ -255,7 +255,7 @@ class Elastic:
 
 
 FIXED_POINT_PLACEMENTS = ("top", "corners", "bottom_support", "station")
-"""Where `Interface.fixed_point_placement` may put fixed pairs (icewall.interface.gap)."""
+"""Where `Interface.fixed_point_placement` may put fixed pairs (icewall.interface.fixed_points)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -282,7 +282,7 @@ class Interface:
         "junctions), bottom_support (fixed_points_per_core bottom-face pairs each side of "
         "each support), station (fixed_points_per_core pairs on each core's top face and as "
         "many on its bottom face, at its mid-length: the core held at one station); thesis "
-        "4.3.2, Fig. 4.15 lost (icewall.interface.gap)")
+        "4.3.2, Fig. 4.15 lost (icewall.interface.fixed_points)")
     stabilization: float = option(1e-6, doc="weak springs between paired nodes in the "
                                   "iteration matrix only (relative to the largest stiffness "
                                   "diagonal): keep a core whose pairs all open in an iterate "

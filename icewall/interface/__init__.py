@@ -15,12 +15,12 @@ from icewall.interface.augmented import (
     reference_rhs,
     split_solution,
 )
+from icewall.interface.fixed_points import choose_fixed_points
 from icewall.interface.gap import (
     FIXED,
     FREE,
     SLIP,
     GapState,
-    choose_fixed_points,
     constraint_matrix,
     count_states,
     friction_work_increment,

@@ -20,6 +20,7 @@ from icewall.interface.augmented import (
     split_solution,
     upper_rows,
 )
+from icewall.interface.fixed_points import fixed_point_mask
 from icewall.interface.gap import (
     FREE,
     GapState,
@@ -27,7 +28,6 @@ from icewall.interface.gap import (
     count_states,
     end_forces,
     end_friction_work,
-    fixed_point_mask,
     friction_work_increment,
     hold_start_gaps,
     new_step,

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from icewall.deck.load import load_deck
-from icewall.interface.gap import FIXED, FREE, fixed_point_mask
+from icewall.interface.fixed_points import fixed_point_mask
+from icewall.interface.gap import FIXED, FREE
 from icewall.mesh.build import build_mesh, region_materials
 from icewall.model.build import build_model
 from icewall.solve.gap_constraints import GapConstraints

@@ -283,7 +283,7 @@ def test_fixed_points_at_one_station_across_each_core():
 def test_fixed_point_mask_of_a_deck_combines_placements():
     from types import SimpleNamespace
 
-    from icewall.interface.gap import fixed_point_mask
+    from icewall.interface.fixed_points import fixed_point_mask
 
     mesh = _cf4_mesh()
     none = SimpleNamespace(fixed_points_per_core=0, fixed_point_placement=("top",))
