@@ -20,6 +20,20 @@ K_t: for a large enough a, det has the sign of det(Z^T K_t Z) on the null space 
 (Finsler's lemma; on CF-4 the smallest eigenvalues agree to three digits between a = 1e4 and
 1e7). The sign comes from one sparse LU: the signs of U's diagonal and the parities of the two
 permutations.
+
+A slipping pair's tangent is free in K_t: its stiffness while the slip goes on. Along a motion
+that reverses the slip the pair sticks (Table 3.2 with the reversal rule of
+`interface.gap.update_states`), so the wall's stiffness depends on the sense of the motion, and
+a mode of the held tangent that reverses a slipping pair in either sense is no mode of the
+wall (the linear comparison solid of Hill 1958 is the softest of its branches; Bazant &
+Cedolin 1991, ch. 10). `stability_sign` therefore tests a negative determinant once more in
+each sense of the fastest unstable mode, with the pairs that sense reverses held: the
+equilibrium is unstable only where one sense stays unstable. (CF-4 from its first maximum to
+8.6 mm: 33 of 41 such states, growing at 0.3-2.6 omega_1, are held in both senses, and 9 of
+the 13 drops taken there raised the load; docs/solver.md item 52.) The sense of each
+pair's slip and of the mode enter only as a product, so the verdict does not depend on either
+sign convention. The concrete's unloading along the mode (also stiffer) is not looked at: the
+test errs on the side of a drop.
 """
 
 from __future__ import annotations
@@ -32,6 +46,7 @@ import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 
 from icewall.interface.augmented import active_rows
+from icewall.interface.gap import SLIP
 from icewall.solve.controls import StrokeControl
 from icewall.solve.problem import Problem
 from icewall.solve.state import Increment, StepFailed
@@ -45,6 +60,12 @@ eigenvalues omega^2 + (SLOWEST_GROWTH omega_1)^2 are negative only for a mode th
 exp(s t) with s above it (an e-folding time of 16 first periods). A mode growing slower
 creeps while the stroke moves on (with the damping, slower still); a drop waiting for it to
 leave a marginal state would not end."""
+FASTEST_MODE = 1e4
+"""The slips a mode reverses are read from the unstable mode that grows fastest, up to this
+multiple of omega_1."""
+REVERSAL_RESOLUTION = 1e-6
+"""A mode moves a pair where the pair's tangential motion exceeds this fraction of the largest
+relative motion of the mode's pairs (below it, the mode's digits, not its shape)."""
 INVERSE_ITERATIONS = 30
 """Inverse iterations for an unstable mode (`unstable_mode`): the imperfection a drop seeds
 needs the mode's direction, not its digits."""
@@ -72,12 +93,18 @@ def determinant_sign(A: sp.spmatrix) -> int:
     return (-1) ** negative * _parity(lu.perm_r) * _parity(lu.perm_c)
 
 
-def held_rows(problem: Problem, weights: np.ndarray) -> sp.csr_matrix:
-    """B: the stroke's row (`weights`, normalised) over the held interface pairs' rows."""
+def held_rows(problem: Problem, weights: np.ndarray, stuck: np.ndarray | None = None
+              ) -> sp.csr_matrix:
+    """B: the stroke's row (`weights`, normalised) over the held interface pairs' rows (and
+    the tangential rows of the pairs `stuck`, (n_pairs,) bool)."""
     rows = [sp.csr_matrix(weights / max(float(np.linalg.norm(weights)), 1e-300))]
     C = getattr(problem.constraints, "C", None)
     if C is not None:
-        rows.append(sp.csr_matrix(C)[active_rows(problem.constraints.state)])
+        held = active_rows(problem.constraints.state)
+        if stuck is not None:
+            held = held.copy()
+            held[1::2] |= stuck
+        rows.append(sp.csr_matrix(C)[held])
     return sp.vstack(rows, format="csr")
 
 
@@ -88,34 +115,75 @@ def free_equations(problem: Problem, n: int) -> np.ndarray:
     return free
 
 
-def held_tangent(problem: Problem, evaluation, weights: np.ndarray
-                 ) -> tuple[sp.csr_matrix, np.ndarray | None]:
-    """K_t + a B^T B on the free equations, and the lumped masses there (None without)."""
+def held_tangent(problem: Problem, evaluation, weights: np.ndarray,
+                 stuck: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray | None]:
+    """K_t + a B^T B on the free equations (B: `held_rows`), and the lumped masses there
+    (None without)."""
     s = problem.structure
     K = s.stiffness(s.with_tangent(evaluation)).tocsr()
     scale = float(np.abs(K.diagonal()).max())
-    B = held_rows(problem, weights)
+    B = held_rows(problem, weights, stuck)
     A = (K + (PENALTY * scale) * (B.T @ B)).tocsr()
     free = free_equations(problem, A.shape[0])
     mass = None if problem.mass is None else problem.mass[free]
     return A[free][:, free], mass
 
 
-def held_sign(problem: Problem, evaluation, weights: np.ndarray, omega: float = 0.0) -> int:
+def held_sign(problem: Problem, evaluation, weights: np.ndarray, omega: float = 0.0,
+              stuck: np.ndarray | None = None) -> int:
     """The sign of det(K_t + a B^T B + (SLOWEST_GROWTH omega)^2 M) on the free equations at
-    the equilibrium of `evaluation` (converged, at the constraints' current pair states), the
-    stroke `weights . u` held (`omega`: the first mode's circular frequency, rad/s; 0 or
-    without masses: det(K_t + a B^T B))."""
-    A, mass = held_tangent(problem, evaluation, weights)
+    the equilibrium of `evaluation` (converged, at the constraints' current pair states, the
+    pairs `stuck` held too), the stroke `weights . u` held (`omega`: the first mode's circular
+    frequency, rad/s; 0 or without masses: det(K_t + a B^T B))."""
+    A, mass = held_tangent(problem, evaluation, weights, stuck)
     if mass is not None and omega > 0.0:  # N/mm: (1/s^2) (t) = N/mm
         A = A + sp.diags((SLOWEST_GROWTH * omega) ** 2 * mass)
     return determinant_sign(A)
 
 
+def stability_sign(problem: Problem, evaluation, weights: np.ndarray,
+                   omega: float = 0.0) -> int:
+    """`held_sign`, or +1 where it is not positive but each sense of the fastest unstable
+    mode reverses a slipping pair and the held tangent with those pairs stuck is positive
+    definite in both (`reversed_slips`): a mode the pairs' friction arrests either way."""
+    sign = held_sign(problem, evaluation, weights, omega)
+    if sign > 0:
+        return sign
+    senses = reversed_slips(problem, evaluation, weights, omega)
+    if senses is None or not all(stuck.any() for stuck in senses):
+        return sign
+    if all(held_sign(problem, evaluation, weights, omega, stuck) > 0 for stuck in senses):
+        return 1
+    return sign
+
+
+def reversed_slips(problem: Problem, evaluation, weights: np.ndarray, omega: float
+                   ) -> tuple[np.ndarray, np.ndarray] | None:
+    """The slipping pairs (n_pairs,) bool whose slip the fastest unstable mode of the held
+    tangent (`fastest_growth`, `unstable_mode`) reverses, in the mode's sense and in the
+    other: a slip reverses where the pair's tangential motion opposes its lam_T (the slip's
+    sense, lam_T dDelta_T > 0 while it slips). None without slipping pairs, masses or omega."""
+    state = getattr(problem.constraints, "state", None)
+    if state is None or problem.mass is None or not omega > 0.0:
+        return None
+    slipping = state.state == SLIP
+    if not slipping.any():
+        return None
+    rate = fastest_growth(problem, evaluation, weights, omega, FASTEST_MODE * omega)
+    if rate == 0.0:
+        return None
+    mode = unstable_mode(problem, evaluation, weights, rate)
+    motion = sp.csr_matrix(problem.constraints.C) @ mode
+    tangential = motion[1::2]
+    moved = np.abs(tangential) > REVERSAL_RESOLUTION * float(np.abs(motion).max())
+    along = tangential * state.lam_T
+    return slipping & moved & (along < 0.0), slipping & moved & (along > 0.0)
+
+
 def stable_under_stroke(problem: Problem, evaluation, weights: np.ndarray,
                         omega: float = 0.0) -> bool:
-    """Whether that equilibrium is stable with the stroke held: `held_sign` positive."""
-    return held_sign(problem, evaluation, weights, omega) > 0
+    """Whether that equilibrium is stable with the stroke held: `stability_sign` positive."""
+    return stability_sign(problem, evaluation, weights, omega) > 0
 
 
 def fastest_growth(problem: Problem, evaluation, weights: np.ndarray, omega: float,
@@ -158,7 +226,7 @@ def unstable_mode(problem: Problem, evaluation, weights: np.ndarray, rate: float
 
 def require_stable(problem: Problem, inc: Increment, reference: np.ndarray,
                    omega: float, held: int = 1) -> int:
-    """The sign of the converged step's `held_sign` (`reference`: the jack loads, `omega`:
+    """The sign of the converged step's `stability_sign` (`reference`: the jack loads, `omega`:
     omega_1 or NaN before it is known); StepFailed ("unstable") where the equilibrium has lost
     the stability of the last stable state, whose sign was `held`: negative where that was
     positive. The test would not stay there; the step is then cut like a failed one, and at
@@ -169,7 +237,7 @@ def require_stable(problem: Problem, inc: Increment, reference: np.ndarray,
     positive again, a negative determinant is that state's, and the test sees no instability
     (one that adds a negative eigenvalue turns it positive: a parity test sees no more)."""
     weights = StrokeControl.of_load(reference).weights
-    sign = held_sign(problem, inc.evaluation, weights, 0.0 if math.isnan(omega) else omega)
+    sign = stability_sign(problem, inc.evaluation, weights, 0.0 if math.isnan(omega) else omega)
     if sign <= 0 and held > 0:
         raise StepFailed("the equilibrium reached is unstable with the stroke held (the held "
                          "tangent's determinant is not positive)", "unstable")

@@ -123,3 +123,44 @@ def test_the_fastest_growth_rate_bounds_the_dense_one_within_a_factor_two():
     elastic = follow_path(problem, newton_settings(0.001, 0.001), massive_bar(False)[1])
     assert fastest_growth(problem, next(elastic)[0].evaluation, weights, omega,
                           1e6 * omega) == 0.0
+
+
+def _two_sliding_blocks(link: float, slips: tuple[float, float]):
+    """Two blocks on a frictional floor, each held by a ground spring k_g = 1 and joined by a
+    link of stiffness `link` (negative: a softening strut), both slipping (SLIP, lam_T of the
+    signs `slips`: the sense each slides in), with unit masses; a fifth, separate equation
+    stands for the stroke. Equations x1, y1, x2, y2, s; pair i: normal row y_i, tangential
+    row x_i. Returns (problem, weights)."""
+    from types import SimpleNamespace
+
+    from icewall.interface.gap import SLIP, GapState
+
+    K = np.zeros((5, 5))
+    K[np.ix_([0, 2], [0, 2])] = np.eye(2) + link * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    K[1, 1] = K[3, 3] = K[4, 4] = 1.0
+    C = sp.csr_matrix((np.ones(4), ([0, 1, 2, 3], [1, 0, 3, 2])), shape=(4, 5))
+    state = GapState.initial(2)
+    state = replace(state, state=np.full(2, SLIP, dtype=np.int8),
+                    lam_N=np.array([-10.0, -10.0]), lam_T=np.array(slips))
+    structure = SimpleNamespace(stiffness=lambda evaluation: sp.csr_matrix(K),
+                                with_tangent=lambda evaluation: evaluation)
+    constraints = SimpleNamespace(C=C, state=state, fixed=np.array([], dtype=int))
+    problem = SimpleNamespace(structure=structure, constraints=constraints, mass=np.ones(5))
+    return problem, np.array([0.0, 0.0, 0.0, 0.0, 1.0])
+
+
+@pytest.mark.parametrize("link", [-0.2, -0.45, -0.55, -0.8, -0.95, -1.05, -1.5])
+def test_a_mode_that_reverses_a_slip_in_either_sense_is_arrested(link):
+    # the held tangent's x block [[1 + k, -k], [-k, 1 + k]] has the eigenvalues 1 (blocks
+    # together) and 1 + 2k (apart), so with both pairs free to slip the blocks are unstable
+    # past k = -1/2. Sliding the same way, the mode apart reverses one block's slip in either
+    # sense, and a reversed slip sticks: the other block alone on 1 + k, stable up to
+    # k = -1. Sliding apart, the mode continues both slips in one sense: unstable past -1/2.
+    from icewall.solve.stability import held_sign, stability_sign
+
+    omega = 1e-3  # the growth margin (1e-5)^2 M is negligible against the stiffnesses
+    same, _ = _two_sliding_blocks(link, (1.0, 1.0))
+    apart, weights = _two_sliding_blocks(link, (1.0, -1.0))
+    assert (held_sign(same, None, weights, omega) > 0) == (1.0 + 2.0 * link > 0.0)
+    assert (stability_sign(same, None, weights, omega) > 0) == (1.0 + link > 0.0)
+    assert (stability_sign(apart, None, weights, omega) > 0) == (1.0 + 2.0 * link > 0.0)
